@@ -1,0 +1,70 @@
+#include "app/app_settings.hpp"
+
+#include "config/config_reader.hpp"
+
+namespace probelight {
+
+using config::ConfigReader;
+using config::Range;
+
+AppSettings loadAppSettings(const std::string& path) {
+  AppSettings settings;
+  ConfigReader file(path);
+
+  ConfigReader maps = file.section("environment_maps");
+  settings.maps.face_size = maps.readInt("face_size", settings.maps.face_size, Range::closed(8, 1024));
+  settings.maps.diffuse_face_size =
+      maps.readInt("diffuse_face_size", settings.maps.diffuse_face_size, Range::closed(4, 256));
+  settings.maps.blur_sigma_rad = maps.readDouble("blur_sigma_rad", settings.maps.blur_sigma_rad, Range::closed(0.01, 1.5));
+  settings.maps.blur_half_taps = maps.readInt("blur_half_taps", settings.maps.blur_half_taps, Range::closed(1, 32));
+  settings.maps.normal_iterations =
+      maps.readInt("normal_iterations", settings.maps.normal_iterations, Range::closed(1, 16));
+  settings.maps.force_8bit = maps.readBool("force_8bit", settings.maps.force_8bit);
+  maps.rejectUnknownFields();
+
+  ConfigReader tracking = file.section("tracking");
+  settings.tracking.quad_decimate =
+      tracking.readDouble("quad_decimate", settings.tracking.quad_decimate, Range::closed(1.0, 8.0));
+  settings.tracking.threads = tracking.readInt("threads", settings.tracking.threads, Range::closed(1, 16));
+  settings.tracking.quad_sigma = tracking.readDouble("quad_sigma", settings.tracking.quad_sigma, Range::closed(0.0, 5.0));
+  settings.tracking.refine_edges = tracking.readBool("refine_edges", settings.tracking.refine_edges);
+  tracking.rejectUnknownFields();
+
+  ConfigReader object = file.section("object");
+  settings.object.radius_m = object.readDouble("radius", settings.object.radius_m, Range::openClosed(0.0, 10.0));
+  const glm::dvec3 position = object.readVec3(
+      "position", glm::dvec3(settings.object.position_w, 0.0), Range::closed(-100.0, 100.0));
+  if (position.z != 0.0) object.fail("position", "the object rests on the ground: give [x, y, 0]");
+  settings.object.position_w = glm::dvec2(position);
+  settings.object.albedo = object.readVec3("albedo", settings.object.albedo, Range::closed(0.0, 1.0));
+  settings.object.k_specular = object.readDouble("k_specular", settings.object.k_specular, Range::closed(0.0, 10.0));
+  settings.object.shininess = object.readDouble("shininess", settings.object.shininess, Range::closed(1.0, 4096.0));
+  settings.object.k_reflect = object.readDouble("k_reflect", settings.object.k_reflect, Range::closed(0.0, 1.0));
+  object.rejectUnknownFields();
+
+  ConfigReader recalibration = file.section("recalibration");
+  settings.recalibration.good_frames_needed =
+      recalibration.readInt("good_frames", settings.recalibration.good_frames_needed, Range::closed(1, 1000));
+  settings.recalibration.max_frames =
+      recalibration.readInt("max_frames", settings.recalibration.max_frames, Range::closed(1, 100000));
+  if (settings.recalibration.max_frames < settings.recalibration.good_frames_needed)
+    recalibration.fail("max_frames", "must be at least good_frames");
+  recalibration.rejectUnknownFields();
+
+  ConfigReader sim = file.section("sim");
+  settings.sim.env = sim.readString("env", settings.sim.env);
+  settings.sim.camera_path = sim.readString("camera_path", settings.sim.camera_path);
+  settings.sim.noise_sigma = sim.readDouble("noise_sigma", settings.sim.noise_sigma, Range::closed(0.0, 64.0));
+  settings.sim.seed = sim.readInt("seed", settings.sim.seed, Range::atLeast(0));
+  sim.rejectUnknownFields();
+
+  ConfigReader output = file.section("output");
+  settings.save_every = output.readInt("save_every", settings.save_every, Range::atLeast(0));
+  settings.gpu_finish = output.readBool("gpu_finish", settings.gpu_finish);
+  output.rejectUnknownFields();
+
+  file.rejectUnknownFields();
+  return settings;
+}
+
+}  // namespace probelight

@@ -1,0 +1,109 @@
+#include "app/command_line.hpp"
+
+#include <charconv>
+#include <functional>
+
+namespace probelight {
+
+namespace {
+
+long long parseInteger(const std::string& flag, const std::string& text, long long min_value) {
+  long long value = 0;
+  const char* begin = text.data();
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(begin, end, value);
+  if (ec != std::errc() || ptr != end || text.empty())
+    throw UsageError("flag " + flag + ": expected a whole number, got '" + text + "'");
+  if (value < min_value)
+    throw UsageError("flag " + flag + ": must be at least " + std::to_string(min_value) + ", got " + text);
+  return value;
+}
+
+void requireChoice(const std::string& flag, const std::string& value, const std::vector<std::string>& choices) {
+  for (const auto& choice : choices)
+    if (value == choice) return;
+  std::string list;
+  for (const auto& choice : choices) list += (list.empty() ? "" : ", ") + choice;
+  throw UsageError("flag " + flag + ": unknown value '" + value + "' (choose " + list + ")");
+}
+
+}  // namespace
+
+RunOptions parseRunOptions(const std::vector<std::string>& args) {
+  RunOptions options;
+  using Setter = std::function<void(const std::string& flag, const std::string& value)>;
+  const std::map<std::string, Setter> valued = {
+      {"--source", [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images"}); options.source = v; }},
+      {"--images", [&](auto&, auto& v) { options.images = v; }},
+      {"--display", [&](auto& f, auto& v) { requireChoice(f, v, {"headless"}); options.display = v; }},
+      {"--button", [&](auto& f, auto& v) { requireChoice(f, v, {"none", "key"}); options.button = v; }},
+      {"--key-input", [&](auto&, auto& v) { options.key_path = v; }},
+      {"--frames", [&](auto& f, auto& v) { options.frames = parseInteger(f, v, 0); }},
+      {"--out", [&](auto&, auto& v) { options.out_dir = v; }},
+      {"--config", [&](auto&, auto& v) { options.config_path = v; }},
+      {"--camera", [&](auto&, auto& v) { options.camera_path = v; }},
+      {"--rig", [&](auto&, auto& v) { options.rig_path = v; }},
+      {"--env", [&](auto&, auto& v) { options.sim_env = v; }},
+      {"--path", [&](auto&, auto& v) { options.sim_path = v; }},
+      {"--save-every", [&](auto& f, auto& v) { options.save_every = static_cast<int>(parseInteger(f, v, 0)); }},
+  };
+  for (size_t i = 0; i < args.size(); ++i) {
+    std::string flag = args[i];
+    std::optional<std::string> inline_value;
+    if (auto eq = flag.find('='); flag.rfind("--", 0) == 0 && eq != std::string::npos) {
+      inline_value = flag.substr(eq + 1);
+      flag = flag.substr(0, eq);
+    }
+    if (flag == "--quiet" && !inline_value) {
+      options.quiet = true;
+      continue;
+    }
+    auto it = valued.find(flag);
+    if (it == valued.end()) throw UsageError("unknown flag '" + flag + "' (see probelight --help)");
+    std::string value;
+    if (inline_value) {
+      value = *inline_value;
+    } else {
+      if (i + 1 >= args.size()) throw UsageError("flag " + flag + " needs a value");
+      value = args[++i];
+    }
+    if (value.empty()) throw UsageError("flag " + flag + " needs a value");
+    it->second(flag, value);
+  }
+  if (options.source == "images" && options.images.empty())
+    throw UsageError("flag --source images needs --images FOLDER_OR_GLOB");
+  if (options.source == "images" && options.camera_path.empty())
+    throw UsageError("flag --source images needs --camera camera.yaml (the calibration of the camera that took them)");
+  if (options.source == "images" && options.rig_path.empty())
+    throw UsageError("flag --source images needs --rig rig.yaml");
+  return options;
+}
+
+std::string usageText() {
+  return R"(probelight: image-based lighting for an AR kiosk (mirror ball + AprilTag)
+
+usage:
+  probelight run [flags]       run the kiosk: frames in, composited frames out
+  probelight --help | --version
+
+run flags:
+  --source sim|images          frame source (default sim: the simulated world)
+  --images FOLDER_OR_GLOB      files to replay with --source images
+  --camera camera.yaml         camera calibration (sim: overrides the simulated camera)
+  --rig rig.yaml               tag and mirror-ball geometry (sim: overrides the simulated rig)
+  --config probelight.yaml     pipeline settings (see board/probelight.yaml)
+  --display headless           headless EGL on Mesa, frames written as PNG
+  --button none|key            recalibration button (key: lines on stdin or a FIFO)
+  --key-input PATH             where --button key reads ('-' = stdin, default)
+  --frames N                   frames to process, 0 = until the source ends (default 300)
+  --save-every K               write every K-th composited frame as PNG, 0 = none (default 1)
+  --out DIR                    output folder for frames and report.json (default out)
+  --env NAME|FILE              sim: environment (studio, sun_sky, overcast, coloured_wall, or an .exr/.hdr)
+  --path NAME                  sim: camera path
+  --quiet                      no per-frame status lines
+
+exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration.
+)";
+}
+
+}  // namespace probelight

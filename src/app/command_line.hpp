@@ -1,0 +1,40 @@
+// Command-line parsing for `probelight <command> [flags]`. A bad flag is a
+// UsageError: one line naming the flag, and exit status 2.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace probelight {
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Flags of `probelight run`. Empty strings mean "not given".
+struct RunOptions {
+  std::string source = "sim";         // sim | images
+  std::string images;                 // folder or glob, for --source images
+  std::string display = "headless";   // headless (kms comes with the board issue)
+  std::string button = "none";        // none | key
+  std::string key_path = "-";         // stdin or a FIFO, for --button key
+  long long frames = 300;             // 0 = until the source ends
+  std::string out_dir = "out";
+  std::string config_path;            // probelight.yaml
+  std::string camera_path;            // camera.yaml
+  std::string rig_path;               // rig.yaml
+  std::string sim_env;                // overrides sim.env
+  std::string sim_path;               // overrides sim.camera_path
+  std::optional<int> save_every;      // overrides output.save_every
+  bool quiet = false;
+};
+
+// Parses the flags after `probelight run`. Throws UsageError.
+RunOptions parseRunOptions(const std::vector<std::string>& args);
+
+std::string usageText();
+
+}  // namespace probelight

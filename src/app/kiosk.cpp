@@ -1,0 +1,456 @@
+#include "app/kiosk.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include <GLES2/gl2.h>
+#include <opencv2/imgproc.hpp>
+
+#include "app/app_settings.hpp"
+#include "app/lighting_state_machine.hpp"
+#include "app/run_report.hpp"
+#include "capture/image_frame_source.hpp"
+#include "capture/sim_frame_source.hpp"
+#include "config/camera_file.hpp"
+#include "config/config_reader.hpp"
+#include "config/rig_file.hpp"
+#include "display/display.hpp"
+#include "gles/capabilities.hpp"
+#include "ibl/cube_map.hpp"
+#include "ibl/dominant_light.hpp"
+#include "ibl/mirror_ball.hpp"
+#include "ibl/probe_outline.hpp"
+#include "input/button_source.hpp"
+#include "pipeline/camera_frame_texture.hpp"
+#include "pipeline/environment_maps.hpp"
+#include "pipeline/object_compositor.hpp"
+#include "sim/world.hpp"
+#include "tracking/tag_tracker.hpp"
+
+namespace probelight {
+
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+// Smallest ball image worth a map: below this the 64^2 faces would mostly
+// magnify a handful of pixels. Issue 3 makes this configurable.
+constexpr double kMinProbeRadiusPx = 8.0;
+// How often the run compares the GPU maps with the simulator's truth; the
+// read-back is not part of the product's frame cost.
+constexpr std::uint64_t kTruthCheckEveryFrames = 10;
+
+double rotationErrorDeg(const glm::dmat3& estimated, const glm::dmat3& truth) {
+  const glm::dmat3 difference = estimated * glm::transpose(truth);
+  const double cosine = (difference[0][0] + difference[1][1] + difference[2][2] - 1.0) * 0.5;
+  return std::acos(std::clamp(cosine, -1.0, 1.0)) * kRadToDeg;
+}
+
+double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+
+// Status text drawn over the frame with OpenCV's Hershey font, re-rendered
+// only when the text changes.
+class StatusOverlay {
+ public:
+  const std::vector<std::uint8_t>& render(const std::string& text, int width, int height) {
+    if (text == text_ && width == width_ && height == height_) return rgba_;
+    text_ = text;
+    width_ = width;
+    height_ = height;
+    cv::Mat canvas(height, width, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+    const double scale = std::max(0.4, width / 1280.0);
+    int baseline = 0;
+    const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+    const int bar_height = size.height + baseline + 12;
+    cv::rectangle(canvas, cv::Rect(0, height - bar_height, width, bar_height), cv::Scalar(0, 0, 0, 160), cv::FILLED);
+    cv::putText(canvas, text, cv::Point(8, height - baseline - 6), cv::FONT_HERSHEY_SIMPLEX, scale,
+                cv::Scalar(255, 255, 255, 255), 1, cv::LINE_AA);
+    rgba_.assign(canvas.data, canvas.data + canvas.total() * 4);
+    return rgba_;
+  }
+
+ private:
+  std::string text_;
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<std::uint8_t> rgba_;
+};
+
+struct LoadedInputs {
+  AppSettings settings;
+  CameraIntrinsics camera;
+  RigGeometry rig;
+  bool camera_from_file = false;
+  bool rig_from_file = false;
+};
+
+// Reads every file the run needs before anything starts, so that a bad one
+// costs nothing but its one-line message.
+LoadedInputs loadInputs(const RunOptions& options) {
+  LoadedInputs inputs;
+  if (!options.config_path.empty()) inputs.settings = loadAppSettings(options.config_path);
+  if (!options.camera_path.empty()) {
+    inputs.camera = config::loadCameraFile(options.camera_path);
+    inputs.camera_from_file = true;
+  }
+  if (!options.rig_path.empty()) {
+    inputs.rig = config::loadRigFile(options.rig_path);
+    inputs.rig_from_file = true;
+  }
+  if (options.save_every) inputs.settings.save_every = *options.save_every;
+  if (!options.sim_env.empty()) inputs.settings.sim.env = options.sim_env;
+  if (!options.sim_path.empty()) inputs.settings.sim.camera_path = options.sim_path;
+  return inputs;
+}
+
+// Errors against the simulator's truth for one frame.
+void measureAgainstTruth(const FrameTruth& truth, const tracking::TagTrackResult& track,
+                         const ibl::ProbeOutline* outline, RunReport& report) {
+  if (!track.found) return;
+  report.recordAccuracy("pose_rotation_error_deg", rotationErrorDeg(track.pose.R_cam_from_world,
+                                                                    truth.pose.R_cam_from_world));
+  const double distance = glm::length(truth.pose.t_cam_from_world);
+  report.recordAccuracy("pose_translation_error_pct",
+                        100.0 * glm::length(track.pose.t_cam_from_world - truth.pose.t_cam_from_world) / distance);
+  if (outline && outline->valid && truth.probe_radius_px > 0.0) {
+    report.recordAccuracy("probe_center_error_px", glm::length(outline->center_px - truth.probe_center_px));
+    report.recordAccuracy("probe_radius_error_px", std::abs(outline->radius_px - truth.probe_radius_px));
+  }
+}
+
+// Compares the GPU's maps with the simulator's radiance and irradiance.
+void measureMapsAgainstTruth(const sim::World& world, std::uint64_t frame_index, const ibl::MirrorBallView& view,
+                             pipeline::EnvironmentMaps& maps, RunReport& report) {
+  // Reflection map: directions the ball shows well (within 100 degrees of the
+  // direction back toward the camera; the rest is squeezed into the rim).
+  const ibl::CubeMapRGB reflection = maps.readReflection();
+  const glm::dvec3 to_camera = glm::normalize(view.pose.cameraCenterWorld() - view.center_w);
+  const double rim_cosine = std::cos(100.0 / kRadToDeg);
+  double abs_error_sum = 0.0;
+  double truth_sum = 0.0;
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    for (int y = 0; y < reflection.face_size; y += 2) {
+      for (int x = 0; x < reflection.face_size; x += 2) {
+        const glm::dvec3 direction = ibl::cubeTexelCenterDirection(face, x, y, reflection.face_size);
+        if (glm::dot(direction, to_camera) < rim_cosine) continue;
+        const glm::dvec3 truth = world.radiance(direction, frame_index).clipped;
+        abs_error_sum += std::abs(luminance(glm::dvec3(reflection.texel(face, x, y))) - luminance(truth));
+        truth_sum += luminance(truth);
+      }
+    }
+  }
+  if (truth_sum > 0.0) report.recordAccuracy("reflection_map_rel_error", abs_error_sum / truth_sum);
+
+  // Diffuse map: it stores a cosine-like average radiance, so irradiance is pi
+  // times it. Compared on the up normal and the four horizontal ones.
+  const ibl::CubeMapRGB diffuse = maps.readDiffuse();
+  const glm::dvec3 normals[] = {{0, 0, 1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+  for (const glm::dvec3& normal : normals) {
+    const sim::IrradianceTruth truth = world.irradiance(normal, frame_index);
+    const double estimated = M_PI * luminance(glm::dvec3(diffuse.sampleBilinear(normal)));
+    if (luminance(truth.clipped) > 0.0)
+      report.recordAccuracy("diffuse_irradiance_rel_error_vs_clipped",
+                            std::abs(estimated - luminance(truth.clipped)) / luminance(truth.clipped));
+    if (luminance(truth.hdr) > 0.0)
+      report.recordAccuracy("diffuse_irradiance_rel_error_vs_hdr",
+                            std::abs(estimated - luminance(truth.hdr)) / luminance(truth.hdr));
+  }
+}
+
+std::string formatVector(const glm::dvec3& v) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3) << "[" << v.x << ", " << v.y << ", " << v.z << "]";
+  return out.str();
+}
+
+}  // namespace
+
+int runKiosk(const RunOptions& options, std::ostream& log) {
+  LoadedInputs inputs;
+  try {
+    inputs = loadInputs(options);
+  } catch (const config::ConfigError& error) {
+    log << "probelight: " << error.what() << "\n";
+    return 2;
+  }
+  AppSettings& settings = inputs.settings;
+
+  // Frame source.
+  std::unique_ptr<FrameSource> source;
+  std::shared_ptr<const sim::World> world;
+  const std::uint64_t frame_limit = static_cast<std::uint64_t>(options.frames);
+  if (options.source == "sim") {
+    sim::SceneConfig scene = sim::defaultScene();
+    scene.environment = settings.sim.env;
+    scene.camera_path.name = settings.sim.camera_path;
+    scene.noise_sigma_code = settings.sim.noise_sigma;
+    scene.seed = static_cast<std::uint64_t>(settings.sim.seed);
+    if (inputs.camera_from_file) scene.camera = inputs.camera;
+    if (inputs.rig_from_file) scene.rig = inputs.rig;
+    try {
+      world = std::make_shared<const sim::World>(scene);
+    } catch (const sim::SceneError& error) {
+      log << "probelight: " << error.what() << "\n";
+      return 2;
+    }
+    inputs.camera = scene.camera;
+    inputs.rig = scene.rig;
+    source = std::make_unique<SimFrameSource>(world, frame_limit);
+  } else {
+    source = std::make_unique<ImageFrameSource>(options.images);
+  }
+  const CameraIntrinsics& camera = inputs.camera;
+  const RigGeometry& rig = inputs.rig;
+
+  // Display and GL.
+  std::string error;
+  std::unique_ptr<Display> display = makeDisplay(options.display, options.out_dir, settings.save_every, error);
+  if (!display || !display->open(camera.width_px, camera.height_px, error)) {
+    log << "probelight: " << error << "\n";
+    return 1;
+  }
+  gles::Capabilities capabilities = gles::probeCapabilities();
+  if (settings.maps.force_8bit) capabilities = capabilities.withoutExtensions();
+  if (!options.quiet) log << "probelight: " << display->describe() << ": " << capabilities.summary() << "\n";
+
+  pipeline::CameraFrameTexture frame_texture;
+  pipeline::EnvironmentMaps maps;
+  pipeline::ObjectCompositor compositor;
+  pipeline::EnvironmentMapSettings map_settings;
+  map_settings.face_size = settings.maps.face_size;
+  map_settings.diffuse_face_size = settings.maps.diffuse_face_size;
+  map_settings.blur_sigma_rad = settings.maps.blur_sigma_rad;
+  map_settings.blur_half_taps = settings.maps.blur_half_taps;
+  map_settings.normal_iterations = settings.maps.normal_iterations;
+  if (!frame_texture.init(capabilities, error) || !maps.init(capabilities, map_settings, error) ||
+      !compositor.init(capabilities, error)) {
+    log << "probelight: GPU set-up failed: " << error << "\n";
+    return 1;
+  }
+
+  tracking::TagDetectorSettings detector_settings;
+  detector_settings.family = rig.tag_family;
+  detector_settings.quad_decimate = static_cast<float>(settings.tracking.quad_decimate);
+  detector_settings.nthreads = settings.tracking.threads;
+  detector_settings.quad_sigma = static_cast<float>(settings.tracking.quad_sigma);
+  detector_settings.refine_edges = settings.tracking.refine_edges;
+  tracking::TagTracker tracker(detector_settings, rig, camera);
+
+  std::unique_ptr<ButtonSource> button = makeButtonSource(options.button, options.key_path, error);
+  if (!button || !button->start(error)) {
+    log << "probelight: " << error << "\n";
+    return 2;
+  }
+  if (!source->start(error)) {
+    log << "probelight: " << error << "\n";
+    return options.source == "images" ? 2 : 1;
+  }
+
+  ibl::SurfaceMaterial material;
+  material.albedo = glm::vec3(settings.object.albedo);
+  material.k_specular = static_cast<float>(settings.object.k_specular);
+  material.shininess = static_cast<float>(settings.object.shininess);
+  material.k_reflect = static_cast<float>(settings.object.k_reflect);
+  ibl::SceneLighting lighting;  // no highlight until the first calibration
+  const glm::dvec3 object_center_w(settings.object.position_w, settings.object.radius_m);
+
+  LightingStateMachine machine(settings.recalibration);
+  RunReport report;
+  StatusOverlay overlay;
+  std::vector<std::uint8_t> luma;
+  bool have_maps = false;
+  std::uint64_t frames_done = 0;
+  int consecutive_timeouts = 0;
+  std::string last_logged_status;
+  const auto loop_start = std::chrono::steady_clock::now();
+  auto gpuDone = [&] {
+    if (settings.gpu_finish) glFinish();
+  };
+
+  while (frame_limit == 0 || frames_done < frame_limit) {
+    for (const ButtonEvent& event : button->poll()) {
+      if (event.kind == ButtonEvent::Kind::kPress) {
+        const bool was_running = machine.state() == AppState::kRunning;
+        machine.onButtonPress();
+        report.count(was_running ? "button_presses_accepted" : "button_presses_ignored");
+        if (!options.quiet)
+          log << "probelight: button: " << (was_running ? "recalibrating lights" : "already recalibrating, ignored")
+              << "\n";
+      } else {
+        report.count("button_long_presses_ignored");
+      }
+    }
+
+    FrameLease lease;
+    const FrameWait wait = source->waitFrame(std::chrono::milliseconds(2000), lease);
+    if (wait == FrameWait::kTimeout) {
+      // A camera that stops delivering: keep the last picture, say so, and give
+      // up only after a long silence.
+      log << "probelight: no frame from " << source->name() << " for 2 s\n";
+      if (++consecutive_timeouts >= 15) {
+        log << "probelight: giving up: " << source->name() << " delivered nothing for 30 s\n";
+        break;
+      }
+      continue;
+    }
+    if (wait == FrameWait::kEndOfStream) break;
+    if (wait == FrameWait::kError) {
+      log << "probelight: " << source->name() << ": " << source->lastError() << "\n";
+      break;
+    }
+    consecutive_timeouts = 0;
+    const FrameBuffer& frame = *lease;
+    const std::uint64_t frame_number = frames_done++;
+
+    if (frame.rgb.width != camera.width_px || frame.rgb.height != camera.height_px) {
+      // The calibration belongs to another resolution: using it would put the
+      // object and the ball in the wrong place. Skip the frame, keep the state.
+      report.count("frames_wrong_size");
+      log << "probelight: " << frame.metadata.origin << ": frame is " << frame.rgb.width << "x" << frame.rgb.height
+          << " but the camera calibration is " << camera.width_px << "x" << camera.height_px << "; frame skipped\n";
+      continue;
+    }
+
+    {
+      StageTimer timer(report, "upload");
+      frame_texture.upload(frame.rgb);
+      gpuDone();
+    }
+
+    tracking::TagTrackResult track;
+    {
+      StageTimer timer(report, "detect_pose");
+      tracking::rgbToLuma(frame.rgb, luma);
+      track = tracker.track(luma.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
+    }
+
+    std::string status;
+    bool maps_updated = false;
+    ibl::MirrorBallView view{camera, track.pose, rig.probe_center_w, rig.probe_radius_m};
+    ibl::ProbeOutline outline;
+    std::string skip_reason;
+    if (!track.found) {
+      report.count("frames_without_tag");
+      skip_reason = "no tag";
+      status = "No tag in view: " + track.status;
+    } else {
+      outline = ibl::computeProbeOutline(view);
+      if (!outline.valid || !outline.fully_in_image) {
+        skip_reason = "ball not fully in view";
+        status = "Mirror ball not fully in view: lighting kept";
+      } else if (outline.radius_px < kMinProbeRadiusPx) {
+        skip_reason = "ball too small";
+        status = "Mirror ball too small in the image: lighting kept";
+      }
+    }
+    if (skip_reason.empty()) {
+      {
+        StageTimer timer(report, "probe_to_cube");
+        maps.updateReflection(frame_texture, view, rig.probe_reflectance);
+        gpuDone();
+      }
+      {
+        StageTimer timer(report, "diffuse_blur");
+        maps.updateDiffuse();
+        gpuDone();
+      }
+      maps_updated = true;
+      have_maps = true;
+    } else {
+      report.recordStageSkip("probe_to_cube", skip_reason);
+      report.recordStageSkip("diffuse_blur", skip_reason);
+    }
+
+    switch (machine.onFrame(maps_updated)) {
+      case FrameOutcome::kFitLights: {
+        const ibl::DominantLight light = ibl::findDominantLight(maps.readDiffuse());
+        lighting.highlight_direction_w = glm::vec3(light.direction_w);
+        lighting.highlight_rgb = glm::vec3(light.rgb);
+        report.count("calibrations_completed");
+        report.extra["lights"]["dominant_light"] = {
+            {"direction", {light.direction_w.x, light.direction_w.y, light.direction_w.z}},
+            {"rgb", {light.rgb.r, light.rgb.g, light.rgb.b}},
+            {"frame", frame_number}};
+        if (!options.quiet)
+          log << "probelight: frame " << frame_number << ": lights recalibrated, dominant light toward "
+              << formatVector(light.direction_w) << " rgb " << formatVector(light.rgb) << "\n";
+        break;
+      }
+      case FrameOutcome::kCalibrationFailed:
+        report.count("calibrations_failed");
+        log << "probelight: frame " << frame_number << ": recalibration gave up (ball not seen in "
+            << machine.policy().max_frames << " frames); previous lighting kept\n";
+        break;
+      case FrameOutcome::kNothing:
+        break;
+    }
+    if (machine.state() == AppState::kRecalibrating) {
+      status = "Recalibrating lights (" + std::to_string(machine.goodFramesSoFar()) + "/" +
+               std::to_string(machine.policy().good_frames_needed) + ")" + (status.empty() ? "" : ": " + status);
+      report.count("frames_recalibrating");
+    }
+
+    {
+      StageTimer timer(report, "render");
+      display->beginFrame();
+      compositor.drawCameraBackground(frame_texture);
+      if (track.found && have_maps)
+        compositor.drawSphereObject(camera, track.pose, object_center_w, settings.object.radius_m, material, lighting,
+                                    maps);
+      if (!status.empty()) {
+        const auto& rgba = overlay.render(status, camera.width_px, camera.height_px);
+        compositor.drawOverlayRGBA(rgba.data(), camera.width_px, camera.height_px);
+      }
+      gpuDone();
+    }
+    if (!status.empty()) report.count("frames_with_status");
+    if (status != last_logged_status && !options.quiet) {
+      log << "probelight: frame " << frame_number << ": " << (status.empty() ? "tracking" : status) << "\n";
+      last_logged_status = status;
+    }
+
+    {
+      StageTimer timer(report, "present");
+      if (frame_limit != 0 && frames_done == frame_limit)
+        if (auto* headless = dynamic_cast<HeadlessDisplay*>(display.get())) headless->keepNextFrame();
+      if (!display->present(frame_number, error)) {
+        log << "probelight: " << error << "\n";
+        return 1;
+      }
+    }
+
+    if (frame.metadata.truth) {
+      measureAgainstTruth(*frame.metadata.truth, track, track.found ? &outline : nullptr, report);
+      if (world && maps_updated && frame_number % kTruthCheckEveryFrames == 0)
+        measureMapsAgainstTruth(*world, frame.metadata.sequence, view, maps, report);
+    }
+  }
+  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+  source->stop();
+
+  report.extra["source"] = source->name();
+  report.extra["display"] = display->describe();
+  report.extra["gl"] = capabilities.summary();
+  report.extra["state_at_end"] = toString(machine.state());
+  report.extra["lighting_storage"] = capabilities.canRenderHalfFloat() ? "half_float" : "rgba8";
+  const nlohmann::json json = report.toJson(static_cast<long long>(frames_done), elapsed_s);
+  const std::filesystem::path report_path = std::filesystem::path(options.out_dir) / "report.json";
+  std::ofstream out(report_path);
+  out << json.dump(2) << "\n";
+  if (!out) {
+    log << "probelight: cannot write " << report_path.string() << "\n";
+    return 1;
+  }
+  if (!options.quiet)
+    log << "probelight: " << frames_done << " frames in " << std::fixed << std::setprecision(1) << elapsed_s
+        << " s; report: " << report_path.string() << "\n";
+  return 0;
+}
+
+}  // namespace probelight

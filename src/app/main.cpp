@@ -1,0 +1,30 @@
+// probelight's entry point: dispatches the command and maps failures to exit
+// statuses (2: bad flags or configuration, 1: runtime failure).
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "app/command_line.hpp"
+#include "app/kiosk.hpp"
+
+int main(int argc, char** argv) {
+  using namespace probelight;
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+    std::cout << usageText();
+    return args.empty() ? 2 : 0;
+  }
+  if (args[0] == "--version") {
+    std::cout << "probelight 0.1.0\n";
+    return 0;
+  }
+  const std::string command = args[0];
+  args.erase(args.begin());
+  try {
+    if (command == "run") return runKiosk(parseRunOptions(args), std::cerr);
+    throw UsageError("unknown command '" + command + "' (see probelight --help)");
+  } catch (const UsageError& error) {
+    std::cerr << "probelight: " << error.what() << "\n";
+    return 2;
+  }
+}

@@ -1,0 +1,72 @@
+// The run's machine-readable record (report.json): milliseconds per stage,
+// error against the simulated truth, and counters. Other tools read the keys
+// "frames", "fps", "stages" and "accuracy"; everything else may grow.
+#pragma once
+
+#include <chrono>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace probelight {
+
+class SampleSeries {
+ public:
+  void add(double value) { values_.push_back(value); }
+  size_t count() const { return values_.size(); }
+  bool empty() const { return values_.empty(); }
+  // Nearest-rank percentile, p in [0, 100]; 0 when empty.
+  double percentile(double p) const;
+  double median() const { return percentile(50.0); }
+  double max() const;
+  double mean() const;
+
+ private:
+  std::vector<double> values_;
+};
+
+class RunReport {
+ public:
+  void recordStageMs(const std::string& stage, double ms) { stage_ms_[stage].add(ms); }
+  void recordStageSkip(const std::string& stage, const std::string& reason);
+  void recordAccuracy(const std::string& measure, double value) { accuracy_[measure].add(value); }
+  void count(const std::string& counter, long long by = 1) { counters_[counter] += by; }
+
+  const SampleSeries* stage(const std::string& name) const;
+  const SampleSeries* accuracy(const std::string& name) const;
+  long long counter(const std::string& name) const;
+
+  // frames: frames processed; elapsed_s: wall time of the frame loop.
+  nlohmann::json toJson(long long frames, double elapsed_s) const;
+
+  nlohmann::json extra = nlohmann::json::object();  // free-form sections (config, gl, status)
+
+ private:
+  std::map<std::string, SampleSeries> stage_ms_;
+  std::map<std::string, int> stage_skips_;
+  std::map<std::string, std::map<std::string, int>> stage_skip_reasons_;
+  std::map<std::string, SampleSeries> accuracy_;
+  std::map<std::string, long long> counters_;
+};
+
+// Times a scope and records it under `stage` when it ends.
+class StageTimer {
+ public:
+  StageTimer(RunReport& report, std::string stage)
+      : report_(report), stage_(std::move(stage)), start_(std::chrono::steady_clock::now()) {}
+  ~StageTimer() {
+    const auto elapsed = std::chrono::steady_clock::now() - start_;
+    report_.recordStageMs(stage_, std::chrono::duration<double, std::milli>(elapsed).count());
+  }
+  StageTimer(const StageTimer&) = delete;
+  StageTimer& operator=(const StageTimer&) = delete;
+
+ private:
+  RunReport& report_;
+  std::string stage_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace probelight

@@ -1,0 +1,83 @@
+// Plain data shared by every layer: calibration, rig geometry, poses, images.
+// No behaviour lives here beyond trivial accessors, so that the simulator (the
+// oracle) and the pipeline (what it checks) can share vocabulary without
+// sharing maths.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace probelight {
+
+// Pinhole camera with OpenCV's 5-term radial-tangential distortion
+// (k1, k2, p1, p2, k3), exactly as cv::calibrateCamera writes camera.yaml.
+// Camera frame: x right, y down, z forward.
+struct CameraIntrinsics {
+  int width_px = 640;
+  int height_px = 480;
+  double fx_px = 525.0;
+  double fy_px = 525.0;
+  double cx_px = 319.5;
+  double cy_px = 239.5;
+  std::array<double, 5> distortion{0, 0, 0, 0, 0};  // k1 k2 p1 p2 k3
+};
+
+// Physical set-up: the marker and the mirror ball. World frame W is the tag's
+// frame: origin at the tag centre, +X toward the right edge of the printed tag
+// image, +Y toward its top edge, +Z up out of the ground.
+struct RigGeometry {
+  std::string tag_family = "tag36h11";
+  int tag_id = 0;
+  double tag_size_m = 0.10;  // outer edge of the black border
+  glm::dvec3 probe_center_w{0.12, 0.0, 0.08};
+  double probe_radius_m = 0.03;
+  double probe_reflectance = 1.0;  // 0..1; chrome is about 0.6-0.8
+};
+
+// Rigid transform taking world points into the camera frame:
+// p_cam = R_cam_from_world * p_w + t_cam_from_world (metres).
+struct PoseCamFromWorld {
+  glm::dmat3 R_cam_from_world{1.0};
+  glm::dvec3 t_cam_from_world{0.0};
+
+  glm::dvec3 toCamera(const glm::dvec3& p_w) const { return R_cam_from_world * p_w + t_cam_from_world; }
+  glm::dvec3 cameraCenterWorld() const { return -glm::transpose(R_cam_from_world) * t_cam_from_world; }
+};
+
+// Tightly packed 8-bit RGB image (camera-encoded, sRGB by default).
+struct ImageRGB8 {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> pixels;  // row-major, 3 bytes per pixel, no padding
+
+  void resize(int w, int h) {
+    width = w;
+    height = h;
+    pixels.assign(static_cast<size_t>(w) * static_cast<size_t>(h) * 3u, 0);
+  }
+  std::uint8_t* row(int y) { return pixels.data() + static_cast<size_t>(y) * static_cast<size_t>(width) * 3u; }
+  const std::uint8_t* row(int y) const { return pixels.data() + static_cast<size_t>(y) * static_cast<size_t>(width) * 3u; }
+  bool empty() const { return width <= 0 || height <= 0; }
+};
+
+}  // namespace probelight
+
+namespace probelight {
+
+// What the simulator knows about a frame it rendered. Carried with sim frames
+// so that the run report can measure error against truth; real sources leave
+// it empty.
+struct FrameTruth {
+  PoseCamFromWorld pose;
+  glm::dvec2 probe_center_px{0.0};  // centre of the ball's image outline
+  double probe_radius_px = 0.0;     // radius of the circle with the outline's area
+  double exposure = 1.0;            // camera linear value = radiance * exposure (before clipping)
+  bool tag_fully_visible = false;
+  bool probe_fully_visible = false;
+};
+
+}  // namespace probelight

@@ -1,0 +1,71 @@
+// The display seam. A display owns the GL context (it decides how the context
+// is made: surfaceless EGL here, GBM/KMS on the board) and the drawable that
+// each frame is composited into.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "core/types.hpp"
+
+namespace probelight {
+
+namespace gles {
+class EglContext;
+class RenderTarget;
+}  // namespace gles
+
+class Display {
+ public:
+  virtual ~Display() = default;
+  // Creates the context (current on the calling thread on return) and a
+  // drawable of the camera frame's size. False with a one-line reason.
+  virtual bool open(int width_px, int height_px, std::string& error) = 0;
+  // Binds the drawable and sets the viewport to it.
+  virtual void beginFrame() = 0;
+  // Shows the finished frame. `frame_number` names it where frames are kept.
+  virtual bool present(std::uint64_t frame_number, std::string& error) = 0;
+  virtual std::string name() const = 0;
+  // Platform and renderer, for the report.
+  virtual std::string describe() const = 0;
+};
+
+// EGL without a display server (Mesa surfaceless); each presented frame is
+// read back and written as DIR/frame_NNNNNN.png when its number is a multiple
+// of save_every (0: never), and always when present() is asked to keep it.
+class HeadlessDisplay final : public Display {
+ public:
+  HeadlessDisplay(std::filesystem::path out_dir, int save_every);
+  ~HeadlessDisplay() override;
+
+  bool open(int width_px, int height_px, std::string& error) override;
+  void beginFrame() override;
+  bool present(std::uint64_t frame_number, std::string& error) override;
+  std::string name() const override { return "headless"; }
+  std::string describe() const override;
+
+  // Keep the next presented frame whatever save_every says (the last frame of
+  // a run, say).
+  void keepNextFrame() { keep_next_ = true; }
+  // The last frame read back (empty if none was kept yet).
+  const ImageRGB8& lastKeptFrame() const { return last_kept_; }
+  const std::filesystem::path& lastKeptPath() const { return last_kept_path_; }
+  int framesWritten() const { return frames_written_; }
+
+ private:
+  std::filesystem::path out_dir_;
+  int save_every_;
+  bool keep_next_ = false;
+  int frames_written_ = 0;
+  std::unique_ptr<gles::EglContext> context_;
+  std::unique_ptr<gles::RenderTarget> target_;
+  ImageRGB8 last_kept_;
+  std::filesystem::path last_kept_path_;
+};
+
+std::unique_ptr<Display> makeDisplay(const std::string& kind, const std::filesystem::path& out_dir, int save_every,
+                                     std::string& error);
+
+}  // namespace probelight

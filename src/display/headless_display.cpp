@@ -1,0 +1,78 @@
+#include <system_error>
+
+#include <GLES2/gl2.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "display/display.hpp"
+#include "gles/egl_context.hpp"
+#include "gles/render_target.hpp"
+
+namespace probelight {
+
+HeadlessDisplay::HeadlessDisplay(std::filesystem::path out_dir, int save_every)
+    : out_dir_(std::move(out_dir)), save_every_(save_every) {}
+
+HeadlessDisplay::~HeadlessDisplay() {
+  target_.reset();  // GL objects go before their context
+  context_.reset();
+}
+
+bool HeadlessDisplay::open(int width_px, int height_px, std::string& error) {
+  context_ = gles::EglContext::createHeadless(error);
+  if (!context_) return false;
+  target_ = std::make_unique<gles::RenderTarget>();
+  if (!target_->init(width_px, height_px, error)) {
+    error = "headless display: " + error;
+    return false;
+  }
+  {
+    std::error_code ec;
+    std::filesystem::create_directories(out_dir_, ec);
+    if (ec) {
+      error = "headless display: cannot create " + out_dir_.string() + ": " + ec.message();
+      return false;
+    }
+  }
+  return true;
+}
+
+void HeadlessDisplay::beginFrame() { target_->bind(); }
+
+bool HeadlessDisplay::present(std::uint64_t frame_number, std::string& error) {
+  const bool keep = keep_next_ || (save_every_ > 0 && frame_number % static_cast<std::uint64_t>(save_every_) == 0);
+  keep_next_ = false;
+  if (!keep) {
+    glFlush();
+    return true;
+  }
+  if (!target_->readRGB(last_kept_, error)) return false;
+  char name[32];
+  std::snprintf(name, sizeof name, "frame_%06llu.png", static_cast<unsigned long long>(frame_number));
+  last_kept_path_ = out_dir_ / name;
+  // OpenCV wants BGR; wrap our RGB bytes and let imwrite swap through a copy.
+  cv::Mat rgb(last_kept_.height, last_kept_.width, CV_8UC3, last_kept_.pixels.data());
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  // Compression level 1: PNG encoding would otherwise cost more than a frame.
+  if (!cv::imwrite(last_kept_path_.string(), bgr, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+    error = "headless display: cannot write " + last_kept_path_.string();
+    return false;
+  }
+  ++frames_written_;
+  return true;
+}
+
+std::string HeadlessDisplay::describe() const {
+  if (!context_) return "headless (closed)";
+  return "headless EGL (" + context_->platformName() + ")";
+}
+
+std::unique_ptr<Display> makeDisplay(const std::string& kind, const std::filesystem::path& out_dir, int save_every,
+                                     std::string& error) {
+  if (kind == "headless") return std::make_unique<HeadlessDisplay>(out_dir, save_every);
+  error = "unknown display '" + kind + "' (choose headless)";
+  return nullptr;
+}
+
+}  // namespace probelight

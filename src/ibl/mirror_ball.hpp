@@ -1,0 +1,51 @@
+// Exact perspective geometry of a mirror ball seen by a calibrated camera:
+// which image pixel shows the reflection of a given world direction, and the
+// reverse. Uses each pixel's true camera ray, not the orthographic sphere-map
+// approximation (seed A's fixed view vector).
+#pragma once
+
+#include <optional>
+
+#include <glm/glm.hpp>
+
+#include "core/types.hpp"
+
+namespace probelight::ibl {
+
+// |e + r| below this means the reflected direction points straight away from
+// the camera (the blind spot), where the ball normal is undefined.
+constexpr double kBlindSpotLength = 1e-6;
+
+struct MirrorBallView {
+  CameraIntrinsics camera;
+  PoseCamFromWorld pose;
+  glm::dvec3 center_w{0.0};
+  double radius_m = 0.0;
+};
+
+// The pixel whose camera ray, reflected off the ball, travels along world
+// direction `reflected_w` (any length > 0). Empty when no such point is
+// visible (the blind spot directly behind the ball). `iterations` fixed-point
+// steps on the ball normal n = normalize(to_camera + reflected); the
+// contraction factor is about radius / distance, so 4 steps reach well below
+// 1e-6 rad at kiosk distances. Exactly, with O the camera centre, C the ball
+// centre and r = normalize(reflected_w), all in W:
+//   n = normalize(normalize(O - C) + r)
+//   repeat `iterations` times: e = normalize(O - (C + radius n)); n = normalize(e + r)
+//   P = C + radius n (from the final n); pixel = projectToPixel(P in camera)
+// Empty when any |e + r| < kBlindSpotLength, when the final P faces away from
+// the camera (dot(n, normalize(O - P)) <= 0) or when P is not in front of it.
+std::optional<glm::dvec2> reflectedDirectionToPixel(const MirrorBallView& view, const glm::dvec3& reflected_w,
+                                                    int iterations = 8);
+// World direction (unit) in which the camera ray through `pixel` leaves the
+// ball after reflection off its nearest hit. Empty when the ray misses the
+// ball. `pixel` is in OpenCV pixel coordinates, as projectToPixel returns.
+std::optional<glm::dvec3> pixelToReflectedDirection(const MirrorBallView& view, const glm::dvec2& pixel);
+// Seed A's approximation, kept only to measure how wrong it is: ball normal
+// n = normalize(r + v) with v = the negated camera z axis in W (fixed along
+// the optical axis, pointing back toward the camera); the pixel is the
+// projected (distorted) ball centre + (fx, fy) * radius / depth * (n_cam.x, n_cam.y),
+// depth being the ball centre's camera z.
+glm::dvec2 orthographicSphereMapPixel(const MirrorBallView& view, const glm::dvec3& reflected_w);
+
+}  // namespace probelight::ibl

@@ -1,0 +1,23 @@
+// CPU reference of stage 2: the ball's image to a world-aligned cube map.
+#pragma once
+
+#include "core/types.hpp"
+#include "ibl/cube_map.hpp"
+#include "ibl/mirror_ball.hpp"
+
+namespace probelight::ibl {
+
+struct ProbeToCubeParams {
+  int face_size = 64;
+  double probe_reflectance = 1.0;
+  int normal_iterations = 4;  // fixed-point steps, the same count the shader unrolls
+};
+
+// For every texel centre direction r: find the pixel that shows r in the ball
+// (reflectedDirectionToPixel with params.normal_iterations), sample the 8-bit
+// image bilinearly in its encoded values (pixel (u, v) has its centre at
+// (u + 0.5, v + 0.5) in pixel units, edges clamped), decode sRGB to linear and
+// divide by probe_reflectance. Texels whose direction is not visible get 0.
+CubeMapRGB probeImageToCubeMap(const MirrorBallView& view, const ImageRGB8& image, const ProbeToCubeParams& params);
+
+}  // namespace probelight::ibl
