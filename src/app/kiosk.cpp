@@ -126,10 +126,14 @@ void measureAgainstTruth(const FrameTruth& truth, const tracking::TagTrackResult
 
 // Compares the GPU's maps with the simulator's radiance and irradiance.
 void measureMapsAgainstTruth(const sim::World& world, std::uint64_t frame_index, const ibl::MirrorBallView& view,
-                             pipeline::EnvironmentMaps& maps, RunReport& report) {
+                             const pipeline::EnvironmentMaps& maps, RunReport& report) {
   // Reflection map: directions the ball shows well (within 100 degrees of the
   // direction back toward the camera; the rest is squeezed into the rim).
-  const ibl::CubeMapRGB reflection = maps.readReflection();
+  std::string error;
+  const std::optional<ibl::CubeMapRGB> reflection_read = maps.readReflection(error);
+  const std::optional<ibl::CubeMapRGB> diffuse_read = maps.readDiffuse(error);
+  if (!reflection_read || !diffuse_read) return;
+  const ibl::CubeMapRGB& reflection = *reflection_read;
   const glm::dvec3 to_camera = glm::normalize(view.pose.cameraCenterWorld() - view.center_w);
   const double rim_cosine = std::cos(100.0 / kRadToDeg);
   double abs_error_sum = 0.0;
@@ -149,7 +153,7 @@ void measureMapsAgainstTruth(const sim::World& world, std::uint64_t frame_index,
 
   // Diffuse map: it stores a cosine-like average radiance, so irradiance is pi
   // times it. Compared on the up normal and the four horizontal ones.
-  const ibl::CubeMapRGB diffuse = maps.readDiffuse();
+  const ibl::CubeMapRGB& diffuse = *diffuse_read;
   const glm::dvec3 normals[] = {{0, 0, 1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
   for (const glm::dvec3& normal : normals) {
     const sim::IrradianceTruth truth = world.irradiance(normal, frame_index);
@@ -223,13 +227,14 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
   pipeline::EnvironmentMaps maps;
   pipeline::ObjectCompositor compositor;
   pipeline::EnvironmentMapSettings map_settings;
-  map_settings.face_size = settings.maps.face_size;
+  map_settings.reflection_face_size = settings.maps.face_size;
+  map_settings.intermediate_face_size = settings.maps.diffuse_face_size;
   map_settings.diffuse_face_size = settings.maps.diffuse_face_size;
   map_settings.blur_sigma_rad = settings.maps.blur_sigma_rad;
   map_settings.blur_half_taps = settings.maps.blur_half_taps;
   map_settings.normal_iterations = settings.maps.normal_iterations;
   if (!frame_texture.init(capabilities, error) || !maps.init(capabilities, map_settings, error) ||
-      !compositor.init(capabilities, error)) {
+      !compositor.init(capabilities, pipeline::ObjectCompositorSettings{}, maps.storage(), error)) {
     log << "probelight: GPU set-up failed: " << error << "\n";
     return 1;
   }
@@ -240,7 +245,13 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
   detector_settings.nthreads = settings.tracking.threads;
   detector_settings.quad_sigma = static_cast<float>(settings.tracking.quad_sigma);
   detector_settings.refine_edges = settings.tracking.refine_edges;
-  tracking::TagTracker tracker(detector_settings, rig, camera);
+  std::unique_ptr<tracking::TagTracker> tracker;
+  try {
+    tracker = std::make_unique<tracking::TagTracker>(detector_settings, rig, camera);
+  } catch (const std::invalid_argument& bad_setting) {
+    log << "probelight: tracking: " << bad_setting.what() << "\n";
+    return 2;
+  }
 
   std::unique_ptr<ButtonSource> button = makeButtonSource(options.button, options.key_path, error);
   if (!button || !button->start(error)) {
@@ -319,7 +330,10 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
 
     {
       StageTimer timer(report, "upload");
-      frame_texture.upload(frame.rgb);
+      if (!frame_texture.upload(frame.rgb, error)) {
+        log << "probelight: " << frame.metadata.origin << ": " << error << "\n";
+        return 1;
+      }
       gpuDone();
     }
 
@@ -327,7 +341,7 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
     {
       StageTimer timer(report, "detect_pose");
       tracking::rgbToLuma(frame.rgb, luma);
-      track = tracker.track(luma.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
+      track = tracker->track(luma.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
     }
 
     std::string status;
@@ -352,12 +366,18 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
     if (skip_reason.empty()) {
       {
         StageTimer timer(report, "probe_to_cube");
-        maps.updateReflection(frame_texture, view, rig.probe_reflectance);
+        if (!maps.updateReflection(frame_texture, view, rig.probe_reflectance, error)) {
+          log << "probelight: " << error << "\n";
+          return 1;
+        }
         gpuDone();
       }
       {
         StageTimer timer(report, "diffuse_blur");
-        maps.updateDiffuse();
+        if (!maps.updateDiffuse(error)) {
+          log << "probelight: " << error << "\n";
+          return 1;
+        }
         gpuDone();
       }
       maps_updated = true;
@@ -369,7 +389,12 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
 
     switch (machine.onFrame(maps_updated)) {
       case FrameOutcome::kFitLights: {
-        const ibl::DominantLight light = ibl::findDominantLight(maps.readDiffuse());
+        const std::optional<ibl::CubeMapRGB> diffuse = maps.readDiffuse(error);
+        if (!diffuse) {
+          log << "probelight: " << error << "\n";
+          return 1;
+        }
+        const ibl::DominantLight light = ibl::findDominantLight(*diffuse);
         lighting.highlight_direction_w = glm::vec3(light.direction_w);
         lighting.highlight_rgb = glm::vec3(light.rgb);
         report.count("calibrations_completed");
@@ -400,12 +425,17 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
       StageTimer timer(report, "render");
       display->beginFrame();
       compositor.drawCameraBackground(frame_texture);
+      bool drawn = true;
       if (track.found && have_maps)
-        compositor.drawSphereObject(camera, track.pose, object_center_w, settings.object.radius_m, material, lighting,
-                                    maps);
-      if (!status.empty()) {
+        drawn = compositor.drawSphereObject(camera, track.pose, object_center_w, settings.object.radius_m, material,
+                                            lighting, maps, error);
+      if (drawn && !status.empty()) {
         const auto& rgba = overlay.render(status, camera.width_px, camera.height_px);
-        compositor.drawOverlayRGBA(rgba.data(), camera.width_px, camera.height_px);
+        drawn = compositor.drawOverlayRGBA(rgba.data(), camera.width_px, camera.height_px, error);
+      }
+      if (!drawn) {
+        log << "probelight: " << error << "\n";
+        return 1;
       }
       gpuDone();
     }
@@ -438,7 +468,7 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
   report.extra["display"] = display->describe();
   report.extra["gl"] = capabilities.summary();
   report.extra["state_at_end"] = toString(machine.state());
-  report.extra["lighting_storage"] = capabilities.canRenderHalfFloat() ? "half_float" : "rgba8";
+  report.extra["map_storage"] = maps.storageDescription();
   const nlohmann::json json = report.toJson(static_cast<long long>(frames_done), elapsed_s);
   const std::filesystem::path report_path = std::filesystem::path(options.out_dir) / "report.json";
   std::ofstream out(report_path);

@@ -15,9 +15,12 @@ struct ProbeToCubeParams {
 
 // For every texel centre direction r: find the pixel that shows r in the ball
 // (reflectedDirectionToPixel with params.normal_iterations), sample the 8-bit
-// image bilinearly in its encoded values (pixel (u, v) has its centre at
-// (u + 0.5, v + 0.5) in pixel units, edges clamped), decode sRGB to linear and
-// divide by probe_reflectance. Texels whose direction is not visible get 0.
+// image bilinearly in its encoded values, decode sRGB to linear and divide by
+// probe_reflectance. Texels whose direction is not visible get 0.
+// Pixel positions follow OpenCV's calibration convention everywhere in
+// probelight: pixel (u, v)'s centre is at integer (u, v) (cx ~ (w - 1) / 2),
+// as projectToPixel returns. A GL texture is therefore sampled at
+// texcoord = (pixel + 0.5) / size. Edges are clamped.
 CubeMapRGB probeImageToCubeMap(const MirrorBallView& view, const ImageRGB8& image, const ProbeToCubeParams& params);
 
 }  // namespace probelight::ibl

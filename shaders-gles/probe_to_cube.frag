@@ -1,0 +1,69 @@
+#version 100
+// Stage 2: the mirror ball's image to one face of a world-aligned cube map,
+// the maths of ibl::probeImageToCubeMap.
+//
+// Precision: geometry is done in coordinates centred on the ball and scaled
+// by its radius (eye at ~10-30 radii), and the projection is written relative
+// to the ball centre's (exactly precomputed) image position, so every mediump
+// quantity is O(1) or a small offset; no metre-scale positions are added to
+// centimetre-scale ones here.
+#include "color_transfer.glsl"
+#include "camera_projection.glsl"
+#include "cube_storage.glsl"
+
+#ifndef NORMAL_ITERATIONS
+#define NORMAL_ITERATIONS 4
+#endif
+
+#ifdef PL_FRAGMENT_HIGHP
+#define BLIND_SPOT_LENGTH 1e-6
+#else
+// 1e-6 is below mediump's resolution next to 1; this only widens the blind
+// spot (already 0) by a few milliradians.
+#define BLIND_SPOT_LENGTH 1e-3
+#endif
+
+varying vec2 v_face_st;
+
+uniform vec3 u_face_center;  // direction at (s, t) = (0.5, 0.5)
+uniform vec3 u_face_s_axis;  // d(direction) / d(2s - 1)
+uniform vec3 u_face_t_axis;  // d(direction) / d(2t - 1)
+
+uniform vec3 u_eye_ball;                 // (camera centre - ball centre) / radius, in W
+uniform mat3 u_rotation_cam_from_world;  // R_cam_from_world
+uniform vec2 u_center_normalized;        // ball centre in the camera: (x/z, y/z)
+uniform float u_radius_over_depth;       // radius / ball centre's camera z
+uniform vec4 u_distortion;               // k1 k2 p1 p2
+uniform float u_distortion_k3;
+uniform vec2 u_center_distorted;   // distortNormalized(u_center_normalized)
+uniform vec2 u_focal_over_size;    // (fx / width, fy / height)
+uniform vec2 u_center_texcoord;    // texcoord of the ball centre's projection
+uniform sampler2D u_camera;        // sRGB bytes, LINEAR, CLAMP_TO_EDGE
+uniform float u_inverse_reflectance;
+uniform float u_storage_scale;     // linear_scale of cube_storage.glsl
+
+void main() {
+  vec3 r = normalize(u_face_center + (2.0 * v_face_st.x - 1.0) * u_face_s_axis +
+                     (2.0 * v_face_st.y - 1.0) * u_face_t_axis);
+  // Fixed-point iteration on the ball normal, as ibl::reflectedDirectionToPixel;
+  // in ball units the surface point is the normal itself.
+  vec3 bisector = normalize(u_eye_ball) + r;
+  bool blind = length(bisector) < BLIND_SPOT_LENGTH;
+  vec3 normal = normalize(bisector);
+  for (int i = 0; i < NORMAL_ITERATIONS; ++i) {
+    bisector = normalize(u_eye_ball - normal) + r;
+    blind = blind || length(bisector) < BLIND_SPOT_LENGTH;
+    normal = normalize(bisector);
+  }
+  // Visible exactly when the normal faces the eye (convex ball).
+  blind = blind || dot(normal, u_eye_ball - normal) <= 0.0;
+  // Camera point = centre_cam + radius * R n; divided by the centre's depth:
+  vec3 offset = u_radius_over_depth * (u_rotation_cam_from_world * normal);
+  float depth_ratio = 1.0 + offset.z;
+  blind = blind || depth_ratio <= 0.0;
+  vec2 normalized = (u_center_normalized + offset.xy) / max(depth_ratio, 1e-3);
+  vec2 distorted = distortNormalized(normalized, u_distortion, u_distortion_k3);
+  vec2 texcoord = u_center_texcoord + (distorted - u_center_distorted) * u_focal_over_size;
+  vec3 linear = srgbToLinear(texture2D(u_camera, texcoord).rgb) * u_inverse_reflectance;
+  gl_FragColor = blind ? vec4(0.0) : encodeCubeTexel(linear, 1.0, u_storage_scale);
+}

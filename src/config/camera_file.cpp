@@ -1,0 +1,93 @@
+#include "config/camera_file.hpp"
+
+#include <cmath>
+
+namespace probelight::config {
+
+namespace {
+
+void checkFinite(const std::string& path, const char* field, double value) {
+  if (!std::isfinite(value))
+    throw ConfigError(path + ": field '" + field + "': must be finite, got " + formatNumber(value));
+}
+
+}  // namespace
+
+void validateCameraIntrinsics(const CameraIntrinsics& camera, const std::string& path) {
+  auto fail = [&](const char* field, const std::string& problem) {
+    throw ConfigError(path + ": field '" + field + "': " + problem);
+  };
+  if (camera.width_px <= 0) fail("image_width", std::to_string(camera.width_px) + " is out of range, must be > 0");
+  if (camera.height_px <= 0) fail("image_height", std::to_string(camera.height_px) + " is out of range, must be > 0");
+  for (double value : {camera.fx_px, camera.fy_px, camera.cx_px, camera.cy_px}) checkFinite(path, "camera_matrix", value);
+  for (double value : camera.distortion) checkFinite(path, "distortion_coefficients", value);
+  if (camera.fx_px <= 0 || camera.fy_px <= 0)
+    fail("camera_matrix", "focal lengths fx=" + formatNumber(camera.fx_px) + ", fy=" + formatNumber(camera.fy_px) +
+                              " must be > 0");
+  // The principal point is near the image centre for any real lens; outside
+  // the image means a wrong resolution or a matrix from another camera.
+  if (camera.cx_px < 0 || camera.cx_px > camera.width_px || camera.cy_px < 0 || camera.cy_px > camera.height_px)
+    fail("camera_matrix", "principal point (" + formatNumber(camera.cx_px) + ", " + formatNumber(camera.cy_px) +
+                              ") is outside the " + std::to_string(camera.width_px) + "x" +
+                              std::to_string(camera.height_px) + " image");
+}
+
+CameraIntrinsics loadCameraFile(const std::string& path) {
+  ConfigReader file(path);
+  // What OpenCV's calibration sample (calibration.cpp) and tutorial
+  // (camera_calibration.cpp) write beside the intrinsics.
+  file.ignoreFields({"calibration_time", "nframes", "nr_of_frames", "board_width", "board_height", "square_size",
+                     "aspectRatio", "aspect_ratio", "fix_aspect_ratio", "flags", "flagValue", "avg_reprojection_error",
+                     "per_view_reprojection_errors", "extrinsic_parameters", "image_points", "grid_points"});
+  if (file.readBool("fisheye_model", false))
+    file.fail("fisheye_model", "fisheye calibrations are not supported; calibrate with the pinhole model");
+
+  CameraIntrinsics camera;
+  camera.width_px = file.readInt("image_width", kRequired, Range::atLeast(1));
+  camera.height_px = file.readInt("image_height", kRequired, Range::atLeast(1));
+
+  cv::Mat matrix = file.readMat("camera_matrix", 3, 3);
+  // OpenCV's pinhole model with zero skew: [fx 0 cx; 0 fy cy; 0 0 1].
+  if (matrix.at<double>(0, 1) != 0.0) file.fail("camera_matrix", "non-zero skew is not supported");
+  if (matrix.at<double>(1, 0) != 0.0 || matrix.at<double>(2, 0) != 0.0 || matrix.at<double>(2, 1) != 0.0 ||
+      matrix.at<double>(2, 2) != 1.0)
+    file.fail("camera_matrix", "expected the form [fx 0 cx; 0 fy cy; 0 0 1]");
+  camera.fx_px = matrix.at<double>(0, 0);
+  camera.fy_px = matrix.at<double>(1, 1);
+  camera.cx_px = matrix.at<double>(0, 2);
+  camera.cy_px = matrix.at<double>(1, 2);
+
+  cv::Mat distortion = file.readMat("distortion_coefficients", ConfigReader::kAnySize, ConfigReader::kAnySize);
+  if (distortion.rows != 1 && distortion.cols != 1)
+    file.fail("distortion_coefficients", "expected a 1xN or Nx1 vector, got " + std::to_string(distortion.rows) + "x" +
+                                             std::to_string(distortion.cols));
+  distortion = distortion.reshape(1, 1);
+  int count = distortion.cols;
+  if (count != 4 && count != 5 && count != 8 && count != 12 && count != 14)
+    file.fail("distortion_coefficients", "expected 4 or 5 coefficients (k1 k2 p1 p2 [k3]), got " + std::to_string(count));
+  for (int i = 5; i < count; ++i)
+    if (distortion.at<double>(0, i) != 0.0)
+      file.fail("distortion_coefficients",
+                "coefficient " + std::to_string(i) + " is non-zero; only k1 k2 p1 p2 k3 are supported");
+  for (int i = 0; i < std::min(count, 5); ++i) camera.distortion[static_cast<std::size_t>(i)] = distortion.at<double>(0, i);
+
+  file.rejectUnknownFields();
+  validateCameraIntrinsics(camera, path);
+  return camera;
+}
+
+void saveCameraFile(const std::string& path, const CameraIntrinsics& camera) {
+  validateCameraIntrinsics(camera, path);
+  cv::FileStorage storage = openYamlForWriting(path);
+  storage.writeComment("probelight camera intrinsics (OpenCV calibration layout)");
+  storage << "image_width" << camera.width_px;
+  storage << "image_height" << camera.height_px;
+  cv::Mat matrix = (cv::Mat_<double>(3, 3) << camera.fx_px, 0, camera.cx_px, 0, camera.fy_px, camera.cy_px, 0, 0, 1);
+  storage << "camera_matrix" << matrix;
+  cv::Mat distortion(1, 5, CV_64F);
+  for (int i = 0; i < 5; ++i) distortion.at<double>(0, i) = camera.distortion[static_cast<std::size_t>(i)];
+  storage << "distortion_coefficients" << distortion;
+  storage.release();
+}
+
+}  // namespace probelight::config

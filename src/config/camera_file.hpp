@@ -1,0 +1,27 @@
+// camera.yaml: the camera's intrinsics, in the layout OpenCV's calibration
+// tools write (image_width, image_height, camera_matrix, distortion_coefficients).
+#pragma once
+
+#include <string>
+
+#include "config/config_reader.hpp"
+#include "core/types.hpp"
+
+namespace probelight::config {
+
+// Reads camera.yaml. Accepts distortion_coefficients as 1x4, 1x5, 4x1 or 5x1
+// (longer rational/thin-prism vectors only when their extra terms are zero)
+// and ignores the bookkeeping keys OpenCV's calibration samples add
+// (calibration_time, nr_of_frames, avg_reprojection_error, ...). Any other key
+// is an error. Throws ConfigError.
+CameraIntrinsics loadCameraFile(const std::string& path);
+
+// Writes camera.yaml in the same layout (distortion as 1x5). Throws
+// ConfigError when `camera` would not load back or the file cannot be written.
+void saveCameraFile(const std::string& path, const CameraIntrinsics& camera);
+
+// The checks loadCameraFile applies, for intrinsics that come from elsewhere
+// (the simulator, a calibration run). Throws ConfigError naming `path`.
+void validateCameraIntrinsics(const CameraIntrinsics& camera, const std::string& path);
+
+}  // namespace probelight::config

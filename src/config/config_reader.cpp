@@ -1,0 +1,335 @@
+#include "config/config_reader.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+namespace probelight::config {
+
+namespace {
+
+std::string collapseToOneLine(std::string text) {
+  for (char& c : text)
+    if (c == '\n' || c == '\r') c = ' ';
+  while (!text.empty() && text.back() == ' ') text.pop_back();
+  return text;
+}
+
+const char* nodeKind(const cv::FileNode& node) {
+  if (node.isInt()) return "an integer";
+  if (node.isReal()) return "a number";
+  if (node.isString()) return "text";
+  if (node.isSeq()) return "a list";
+  if (node.isMap()) return "a map";
+  return "nothing";
+}
+
+std::string describeNode(const cv::FileNode& node) {
+  if (node.isString()) {
+    std::string text = static_cast<std::string>(node);
+    // OpenCV's YAML reader keeps "text  # comment" as one string.
+    if (text.find('#') != std::string::npos)
+      return "text '" + text + "' (OpenCV's YAML has no end-of-line comments after text: put the comment on a line of its own)";
+    return "text '" + text + "'";
+  }
+  if (node.isInt()) return "integer " + std::to_string(static_cast<int>(node));
+  if (node.isReal()) return "number " + formatNumber(static_cast<double>(node));
+  return nodeKind(node);
+}
+
+bool hasYamlHeader(const std::string& text) {
+  std::size_t start = text.find_first_not_of(" \t\r\n");
+  return start != std::string::npos && text.compare(start, 5, "%YAML") == 0;
+}
+
+// OpenCV reports parse errors as "... in function '<name>(<line>): <problem>'".
+std::string describeParseError(const cv::Exception& e, int header_lines_added) {
+  static const std::regex located(R"(\((\d+)\): ([^']*))");
+  std::smatch match;
+  if (std::regex_search(e.msg, match, located)) {
+    int line = std::stoi(match[1].str()) - header_lines_added;
+    return "malformed YAML at line " + std::to_string(std::max(line, 1)) + ": " + match[2].str();
+  }
+  return "malformed YAML: " + (e.err.empty() ? std::string(e.what()) : e.err);
+}
+
+void rejectDuplicateKeys(const cv::FileNode& map, const std::string& path, const std::string& prefix) {
+  std::set<std::string> seen;
+  for (const std::string& key : map.keys())
+    if (!seen.insert(key).second) throw ConfigError(path + ": field '" + prefix + key + "': appears more than once");
+}
+
+}  // namespace
+
+ConfigError::ConfigError(const std::string& message) : std::runtime_error(collapseToOneLine(message)) {}
+
+std::string formatNumber(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  char buffer[64];
+  auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+cv::FileStorage openYamlForWriting(const std::string& path) {
+  cv::FileStorage storage;
+  try {
+    storage.open(path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+  } catch (const cv::Exception& e) {
+    throw ConfigError(path + ": cannot write file (" + e.err + ")");
+  }
+  if (!storage.isOpened()) throw ConfigError(path + ": cannot write file (missing folder or no permission)");
+  return storage;
+}
+
+bool Range::contains(double value) const {
+  bool above_min = min_inclusive ? value >= min : value > min;
+  bool below_max = max_inclusive ? value <= max : value < max;
+  return above_min && below_max;
+}
+
+std::string Range::describe() const {
+  bool has_min = std::isfinite(min);
+  bool has_max = std::isfinite(max);
+  if (has_min && has_max)
+    return std::string("in ") + (min_inclusive ? "[" : "(") + formatNumber(min) + ", " + formatNumber(max) +
+           (max_inclusive ? "]" : ")");
+  if (has_min) return std::string(min_inclusive ? ">= " : "> ") + formatNumber(min);
+  if (has_max) return std::string(max_inclusive ? "<= " : "< ") + formatNumber(max);
+  return "any finite number";
+}
+
+struct ConfigReader::Document {
+  cv::FileStorage storage;
+};
+
+ConfigReader::ConfigReader(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path + ": cannot open file (missing or unreadable)");
+  std::stringstream text;
+  text << in.rdbuf();
+  *this = fromText(text.str(), path);
+}
+
+ConfigReader ConfigReader::fromText(const std::string& yaml_text, const std::string& display_name) {
+  if (yaml_text.find_first_not_of(" \t\r\n") == std::string::npos) throw ConfigError(display_name + ": file is empty");
+  // OpenCV refuses YAML without its "%YAML:1.0" first line; people writing
+  // rig.yaml by hand should not have to know that.
+  int header_lines_added = 0;
+  std::string text = yaml_text;
+  if (!hasYamlHeader(text)) {
+    text = "%YAML:1.0\n" + text;
+    header_lines_added = 1;
+  }
+  auto document = std::make_shared<Document>();
+  try {
+    document->storage.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+  } catch (const cv::Exception& e) {
+    throw ConfigError(display_name + ": " + describeParseError(e, header_lines_added));
+  }
+  if (!document->storage.isOpened()) throw ConfigError(display_name + ": not a YAML file OpenCV can read");
+  cv::FileNode root = document->storage.root();
+  if (!root.isMap()) throw ConfigError(display_name + ": expected a map of 'field: value' lines at the top level");
+  rejectDuplicateKeys(root, display_name, "");
+  ConfigReader reader(document, root, "");
+  reader.path_ = display_name;
+  return reader;
+}
+
+ConfigReader::ConfigReader(std::shared_ptr<Document> document, cv::FileNode node, std::string prefix)
+    : document_(std::move(document)), node_(std::move(node)), prefix_(std::move(prefix)) {}
+
+std::string ConfigReader::fieldName(std::string_view name) const { return prefix_ + std::string(name); }
+
+void ConfigReader::fail(std::string_view name, const std::string& problem) const {
+  throw ConfigError(path_ + ": field '" + fieldName(name) + "': " + problem);
+}
+
+bool ConfigReader::has(std::string_view name) const {
+  if (!node_.isMap()) return false;
+  cv::FileNode node = node_[std::string(name)];
+  return !node.empty() && !node.isNone();
+}
+
+cv::FileNode ConfigReader::lookup(std::string_view name) {
+  known_.emplace(name);
+  if (!node_.isMap()) return cv::FileNode();
+  return node_[std::string(name)];
+}
+
+double ConfigReader::toNumber(std::string_view name, const cv::FileNode& node) const {
+  double value = 0.0;
+  if (node.isInt())
+    value = static_cast<int>(node);
+  else if (node.isReal())
+    value = static_cast<double>(node);
+  else
+    fail(name, "expected a number, got " + describeNode(node));
+  if (!std::isfinite(value)) fail(name, "must be a finite number, got " + formatNumber(value));
+  return value;
+}
+
+double ConfigReader::readDouble(std::string_view name, std::optional<double> default_value, Range range) {
+  cv::FileNode node = lookup(name);
+  if (node.empty() || node.isNone()) {
+    if (default_value) return *default_value;
+    fail(name, "missing (required number " + range.describe() + ")");
+  }
+  double value = toNumber(name, node);
+  if (!range.contains(value)) fail(name, formatNumber(value) + " is out of range, must be " + range.describe());
+  return value;
+}
+
+int ConfigReader::readInt(std::string_view name, std::optional<int> default_value, Range range) {
+  cv::FileNode node = lookup(name);
+  if (node.empty() || node.isNone()) {
+    if (default_value) return *default_value;
+    fail(name, "missing (required integer " + range.describe() + ")");
+  }
+  if (!node.isInt()) fail(name, "expected an integer, got " + describeNode(node));
+  int value = static_cast<int>(node);
+  if (!range.contains(value)) fail(name, std::to_string(value) + " is out of range, must be " + range.describe());
+  return value;
+}
+
+bool ConfigReader::readBool(std::string_view name, std::optional<bool> default_value) {
+  cv::FileNode node = lookup(name);
+  if (node.empty() || node.isNone()) {
+    if (default_value) return *default_value;
+    fail(name, "missing (required true/false)");
+  }
+  if (node.isInt()) {
+    int value = static_cast<int>(node);
+    if (value == 0 || value == 1) return value == 1;
+  } else if (node.isString()) {
+    std::string text = static_cast<std::string>(node);
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (text == "true" || text == "yes" || text == "on") return true;
+    if (text == "false" || text == "no" || text == "off") return false;
+  }
+  fail(name, "expected true or false, got " + describeNode(node));
+}
+
+std::string ConfigReader::readString(std::string_view name, std::optional<std::string> default_value,
+                                     const std::vector<std::string>& allowed) {
+  cv::FileNode node = lookup(name);
+  if (node.empty() || node.isNone()) {
+    if (default_value) return *default_value;
+    fail(name, "missing (required text)");
+  }
+  if (!node.isString()) fail(name, "expected text, got " + describeNode(node));
+  std::string value = static_cast<std::string>(node);
+  if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
+    if (value.find('#') != std::string::npos) fail(name, "expected one of the allowed names, got " + describeNode(node));
+    std::string choices;
+    for (const std::string& choice : allowed) choices += (choices.empty() ? "" : ", ") + choice;
+    fail(name, "'" + value + "' is not one of: " + choices);
+  }
+  return value;
+}
+
+std::vector<double> ConfigReader::readDoubleList(std::string_view name, std::optional<std::vector<double>> default_value,
+                                                 std::size_t min_count, std::size_t max_count, Range range_each) {
+  cv::FileNode node = lookup(name);
+  if (node.empty() || node.isNone()) {
+    if (default_value) return *default_value;
+    fail(name, "missing (required list of numbers)");
+  }
+  std::string count_text = min_count == max_count ? std::to_string(min_count)
+                                                  : std::to_string(min_count) + " to " + std::to_string(max_count);
+  if (!node.isSeq()) fail(name, "expected a list of " + count_text + " numbers like [1, 2, 3], got " + describeNode(node));
+  std::size_t count = node.size();
+  if (count < min_count || count > max_count)
+    fail(name, "expected " + count_text + " numbers, got " + std::to_string(count));
+  std::vector<double> values;
+  for (std::size_t i = 0; i < count; ++i) {
+    cv::FileNode element = node[static_cast<int>(i)];
+    std::string element_name = std::string(name) + "[" + std::to_string(i) + "]";
+    double value = toNumber(element_name, element);
+    if (!range_each.contains(value))
+      fail(element_name, formatNumber(value) + " is out of range, must be " + range_each.describe());
+    values.push_back(value);
+  }
+  return values;
+}
+
+glm::dvec3 ConfigReader::readVec3(std::string_view name, std::optional<glm::dvec3> default_value, Range range_each) {
+  std::optional<std::vector<double>> fallback;
+  if (default_value) fallback = std::vector<double>{default_value->x, default_value->y, default_value->z};
+  std::vector<double> values = readDoubleList(name, fallback, 3, 3, range_each);
+  return {values[0], values[1], values[2]};
+}
+
+cv::Mat ConfigReader::readMat(std::string_view name, int rows, int cols) {
+  cv::FileNode node = lookup(name);
+  std::string shape_text = (rows == kAnySize ? std::string("N") : std::to_string(rows)) + "x" +
+                           (cols == kAnySize ? std::string("M") : std::to_string(cols));
+  if (node.empty() || node.isNone()) fail(name, "missing (required " + shape_text + " matrix)");
+  cv::Mat matrix;
+  if (node.isSeq()) {
+    // A flat list: its length must fit the fixed dimensions; with both free
+    // it is a row vector (how people write distortion coefficients by hand).
+    std::size_t count = node.size();
+    std::size_t expected_min = 1, expected_max = std::numeric_limits<std::size_t>::max();
+    if (rows != kAnySize && cols != kAnySize) expected_min = expected_max = static_cast<std::size_t>(rows * cols);
+    std::vector<double> values = readDoubleList(name, kRequired, expected_min, expected_max);
+    int known = rows != kAnySize ? rows : (cols != kAnySize ? cols : 0);
+    if (known > 0 && count % static_cast<std::size_t>(known) != 0)
+      fail(name, "expected a " + shape_text + " matrix, got a list of " + std::to_string(count) + " numbers");
+    int matrix_rows = rows != kAnySize ? rows : (cols != kAnySize ? static_cast<int>(count) / cols : 1);
+    matrix = cv::Mat(values, true).reshape(1, matrix_rows);
+  } else if (node.isMap()) {
+    if (node["rows"].empty() || node["cols"].empty() || node["data"].empty())
+      fail(name, "expected an !!opencv-matrix with rows, cols, dt and data");
+    try {
+      cv::read(node, matrix, cv::Mat());
+    } catch (const cv::Exception& e) {
+      fail(name, "not a valid !!opencv-matrix (" + e.err + ")");
+    }
+    if (matrix.empty() || matrix.channels() != 1) fail(name, "not a valid single-channel !!opencv-matrix");
+    matrix.convertTo(matrix, CV_64F);
+  } else {
+    fail(name, "expected a " + shape_text + " !!opencv-matrix, got " + describeNode(node));
+  }
+  if ((rows != kAnySize && matrix.rows != rows) || (cols != kAnySize && matrix.cols != cols))
+    fail(name, "expected a " + shape_text + " matrix, got " + std::to_string(matrix.rows) + "x" +
+                   std::to_string(matrix.cols));
+  for (int r = 0; r < matrix.rows; ++r)
+    for (int c = 0; c < matrix.cols; ++c)
+      if (!std::isfinite(matrix.at<double>(r, c)))
+        fail(name, "element (" + std::to_string(r) + ", " + std::to_string(c) + ") is " +
+                       formatNumber(matrix.at<double>(r, c)) + ", must be finite");
+  return matrix;
+}
+
+ConfigReader ConfigReader::section(std::string_view name) {
+  cv::FileNode node = lookup(name);
+  if (!node.empty() && !node.isNone()) {
+    if (!node.isMap()) fail(name, "expected a section (a map of fields), got " + describeNode(node));
+    rejectDuplicateKeys(node, path_, fieldName(name) + ".");
+  } else {
+    node = cv::FileNode();
+  }
+  ConfigReader child(document_, node, fieldName(name) + ".");
+  child.path_ = path_;
+  return child;
+}
+
+void ConfigReader::ignoreFields(std::initializer_list<std::string_view> names) {
+  for (std::string_view name : names) known_.emplace(name);
+}
+
+void ConfigReader::rejectUnknownFields() const {
+  if (!node_.isMap()) return;
+  for (const std::string& key : node_.keys()) {
+    if (known_.count(key)) continue;
+    std::string known_list;
+    for (const std::string& known : known_) known_list += (known_list.empty() ? "" : ", ") + known;
+    fail(key, "unknown field (known fields: " + known_list + ")");
+  }
+}
+
+}  // namespace probelight::config

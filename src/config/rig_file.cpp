@@ -1,0 +1,82 @@
+#include "config/rig_file.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace probelight::config {
+
+const std::vector<TagFamilyInfo>& knownTagFamilies() {
+  // Code counts of libapriltag 3.3's generated families (checked against the
+  // library in tests/tracking).
+  static const std::vector<TagFamilyInfo> families = {
+      {"tag36h11", 587},         {"tag36h10", 2320},       {"tag25h9", 35},
+      {"tag16h5", 30},           {"tagCircle21h7", 38},    {"tagCircle49h12", 65535},
+      {"tagCustom48h12", 42211}, {"tagStandard41h12", 2115}, {"tagStandard52h13", 48714},
+  };
+  return families;
+}
+
+namespace {
+
+const TagFamilyInfo* findFamily(const std::string& name) {
+  for (const TagFamilyInfo& family : knownTagFamilies())
+    if (family.name == name) return &family;
+  return nullptr;
+}
+
+std::vector<std::string> familyNames() {
+  std::vector<std::string> names;
+  for (const TagFamilyInfo& family : knownTagFamilies()) names.push_back(family.name);
+  return names;
+}
+
+}  // namespace
+
+void validateRigGeometry(const RigGeometry& rig, const std::string& path) {
+  auto fail = [&](const char* field, const std::string& problem) {
+    throw ConfigError(path + ": field '" + field + "': " + problem);
+  };
+  const TagFamilyInfo* family = findFamily(rig.tag_family);
+  if (!family) fail("tag_family", "'" + rig.tag_family + "' is not a family libapriltag ships");
+  if (rig.tag_id < 0 || rig.tag_id >= family->code_count)
+    fail("tag_id", std::to_string(rig.tag_id) + " is out of range, " + family->name + " has ids 0.." +
+                       std::to_string(family->code_count - 1));
+  if (!std::isfinite(rig.tag_size_m) || rig.tag_size_m <= 0)
+    fail("tag_size", formatNumber(rig.tag_size_m) + " is out of range, must be > 0");
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(rig.probe_center_w[i])) fail("probe_center", "must be 3 finite numbers");
+  if (!std::isfinite(rig.probe_radius_m) || rig.probe_radius_m <= 0)
+    fail("probe_radius", formatNumber(rig.probe_radius_m) + " is out of range, must be > 0");
+  if (!(rig.probe_reflectance > 0 && rig.probe_reflectance <= 1))
+    fail("probe_reflectance", formatNumber(rig.probe_reflectance) + " is out of range, must be in (0, 1]");
+}
+
+RigGeometry loadRigFile(const std::string& path) {
+  ConfigReader file(path);
+  RigGeometry rig;
+  rig.tag_family = file.readString("tag_family", kRequired, familyNames());
+  const TagFamilyInfo* family = findFamily(rig.tag_family);
+  rig.tag_id = file.readInt("tag_id", kRequired, Range::closed(0, family->code_count - 1));
+  rig.tag_size_m = file.readDouble("tag_size", kRequired, Range::above(0.0));
+  rig.probe_center_w = file.readVec3("probe_center", kRequired);
+  rig.probe_radius_m = file.readDouble("probe_radius", kRequired, Range::above(0.0));
+  rig.probe_reflectance = file.readDouble("probe_reflectance", 1.0, Range::openClosed(0.0, 1.0));
+  file.rejectUnknownFields();
+  validateRigGeometry(rig, path);
+  return rig;
+}
+
+void saveRigFile(const std::string& path, const RigGeometry& rig) {
+  validateRigGeometry(rig, path);
+  cv::FileStorage storage = openYamlForWriting(path);
+  storage.writeComment("probelight rig: the marker and the mirror ball, in the tag's frame W (metres)");
+  storage << "tag_family" << rig.tag_family;
+  storage << "tag_id" << rig.tag_id;
+  storage << "tag_size" << rig.tag_size_m;
+  storage << "probe_center" << "[:" << rig.probe_center_w.x << rig.probe_center_w.y << rig.probe_center_w.z << "]";
+  storage << "probe_radius" << rig.probe_radius_m;
+  storage << "probe_reflectance" << rig.probe_reflectance;
+  storage.release();
+}
+
+}  // namespace probelight::config

@@ -1,0 +1,88 @@
+#include "gles/capabilities.hpp"
+
+#include <cstring>
+
+#include <GLES2/gl2.h>
+
+namespace probelight::gles {
+
+namespace {
+
+bool hasExtension(const char* list, const char* name) {
+  if (list == nullptr) return false;
+  const size_t length = std::strlen(name);
+  for (const char* p = list; (p = std::strstr(p, name)) != nullptr; p += length) {
+    const bool starts = p == list || p[-1] == ' ';
+    const bool ends = p[length] == ' ' || p[length] == '\0';
+    if (starts && ends) return true;
+  }
+  return false;
+}
+
+std::string glString(GLenum name) {
+  const auto* text = reinterpret_cast<const char*>(glGetString(name));
+  return text != nullptr ? text : "";
+}
+
+}  // namespace
+
+Capabilities probeCapabilities() {
+  Capabilities caps;
+  const auto* extensions = reinterpret_cast<const char*>(glGetString(GL_EXTENSIONS));
+  caps.texture_half_float = hasExtension(extensions, "GL_OES_texture_half_float");
+  caps.texture_half_float_linear = hasExtension(extensions, "GL_OES_texture_half_float_linear");
+  caps.color_buffer_half_float = hasExtension(extensions, "GL_EXT_color_buffer_half_float");
+  caps.texture_float = hasExtension(extensions, "GL_OES_texture_float");
+  caps.color_buffer_float = hasExtension(extensions, "GL_EXT_color_buffer_float");
+  caps.depth_texture = hasExtension(extensions, "GL_OES_depth_texture");
+  caps.egl_image_external = hasExtension(extensions, "GL_OES_EGL_image_external");
+  caps.standard_derivatives = hasExtension(extensions, "GL_OES_standard_derivatives");
+
+  GLint range[2] = {0, 0};
+  GLint precision = 0;
+  glGetShaderPrecisionFormat(GL_FRAGMENT_SHADER, GL_HIGH_FLOAT, range, &precision);
+  // GLES2 reports range and precision 0 when highp is unsupported in fragment shaders.
+  caps.fragment_highp = precision > 0;
+  caps.fragment_highp_mantissa_bits = precision;
+  glGetShaderPrecisionFormat(GL_FRAGMENT_SHADER, GL_MEDIUM_FLOAT, range, &precision);
+  caps.fragment_mediump_mantissa_bits = precision;
+
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &caps.max_texture_size_px);
+  glGetIntegerv(GL_MAX_CUBE_MAP_TEXTURE_SIZE, &caps.max_cube_map_size_px);
+  caps.renderer = glString(GL_RENDERER);
+  caps.version = glString(GL_VERSION);
+  return caps;
+}
+
+Capabilities Capabilities::withoutExtensions() const {
+  Capabilities plain;
+  plain.fragment_mediump_mantissa_bits = fragment_mediump_mantissa_bits;
+  plain.max_texture_size_px = max_texture_size_px;
+  plain.max_cube_map_size_px = max_cube_map_size_px;
+  plain.renderer = renderer + " [extensions masked]";
+  plain.version = version;
+  return plain;
+}
+
+std::string Capabilities::summary() const {
+  std::string text = renderer + " | " + version + " | fragment highp " +
+                     (fragment_highp ? std::to_string(fragment_highp_mantissa_bits) + " bits" : std::string("no")) +
+                     ", mediump " + std::to_string(fragment_mediump_mantissa_bits) + " bits | max tex " +
+                     std::to_string(max_texture_size_px) + ", cube " + std::to_string(max_cube_map_size_px) + " |";
+  auto flag = [&text](bool on, const char* name) {
+    text += on ? " +" : " -";
+    text += name;
+  };
+  flag(texture_half_float, "half_float");
+  flag(texture_half_float_linear, "half_float_linear");
+  flag(color_buffer_half_float, "cb_half_float");
+  flag(texture_float, "float");
+  flag(color_buffer_float, "cb_float");
+  flag(depth_texture, "depth_texture");
+  flag(egl_image_external, "egl_image_external");
+  flag(standard_derivatives, "derivatives");
+  text += canRenderHalfFloat() ? " | maps: half float" : " | maps: 8-bit";
+  return text;
+}
+
+}  // namespace probelight::gles

@@ -1,0 +1,40 @@
+// What the current GLES2 context can do, probed at run time. Stages choose
+// their storage formats from this, never from the GL version string (Mesa
+// reports ES 3.2 even for an ES 2 request; the board's GPU does not).
+#pragma once
+
+#include <string>
+
+namespace probelight::gles {
+
+struct Capabilities {
+  bool texture_half_float = false;         // GL_OES_texture_half_float
+  bool texture_half_float_linear = false;  // GL_OES_texture_half_float_linear
+  bool color_buffer_half_float = false;    // GL_EXT_color_buffer_half_float
+  bool texture_float = false;              // GL_OES_texture_float
+  bool color_buffer_float = false;         // GL_EXT_color_buffer_float
+  bool depth_texture = false;              // GL_OES_depth_texture
+  bool egl_image_external = false;         // GL_OES_EGL_image_external
+  bool standard_derivatives = false;       // GL_OES_standard_derivatives
+  bool fragment_highp = false;             // highp float exists in fragment shaders
+  int fragment_highp_mantissa_bits = 0;    // 23 for IEEE single; 0 when absent
+  int fragment_mediump_mantissa_bits = 0;  // 10 for IEEE half
+  int max_texture_size_px = 0;
+  int max_cube_map_size_px = 0;
+  std::string renderer;  // GL_RENDERER
+  std::string version;   // GL_VERSION
+
+  // Stages may store linear half floats only when they can both sample and
+  // render them; otherwise they use the 8-bit path.
+  bool canRenderHalfFloat() const { return texture_half_float && color_buffer_half_float; }
+  // A copy with every optional extension and fragment highp cleared, to run
+  // (and test) the plain 8-bit, mediump-declared path on any GPU.
+  Capabilities withoutExtensions() const;
+  // One line for logs: renderer, version, precision and extension flags.
+  std::string summary() const;
+};
+
+// Queries the context current on this thread.
+Capabilities probeCapabilities();
+
+}  // namespace probelight::gles

@@ -1,0 +1,182 @@
+#include "gles/egl_context.hpp"
+
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include <EGL/eglext.h>
+
+namespace probelight::gles {
+
+namespace {
+
+bool hasExtension(const char* list, const char* name) {
+  if (list == nullptr) return false;
+  const size_t length = std::strlen(name);
+  for (const char* p = list; (p = std::strstr(p, name)) != nullptr; p += length) {
+    const bool starts = p == list || p[-1] == ' ';
+    const bool ends = p[length] == ' ' || p[length] == '\0';
+    if (starts && ends) return true;
+  }
+  return false;
+}
+
+// Initializes `display`, picks an RGBA8 ES2 config and makes a context
+// current, with a 1x1 pbuffer when `use_pbuffer`. Terminates the display on
+// failure so callers can try the next platform.
+std::unique_ptr<EglContext> finishContext(EGLDisplay display, bool use_pbuffer, const std::string& platform_name,
+                                          std::string& why) {
+  if (display == EGL_NO_DISPLAY) {
+    why = "no display (" + eglErrorName(eglGetError()) + ")";
+    return nullptr;
+  }
+  EGLint major = 0;
+  EGLint minor = 0;
+  if (!eglInitialize(display, &major, &minor)) {
+    why = "eglInitialize failed (" + eglErrorName(eglGetError()) + ")";
+    return nullptr;
+  }
+  auto fail = [&](const std::string& message) {
+    why = message + " (" + eglErrorName(eglGetError()) + ")";
+    eglTerminate(display);
+    return nullptr;
+  };
+  const char* display_extensions = eglQueryString(display, EGL_EXTENSIONS);
+  if (!use_pbuffer && !hasExtension(display_extensions, "EGL_KHR_surfaceless_context")) {
+    why = "display lacks EGL_KHR_surfaceless_context";
+    eglTerminate(display);
+    return nullptr;
+  }
+  if (!eglBindAPI(EGL_OPENGL_ES_API)) return fail("eglBindAPI(EGL_OPENGL_ES_API) failed");
+  const EGLint config_attributes[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_ES2_BIT,
+                                      EGL_SURFACE_TYPE,    use_pbuffer ? EGL_PBUFFER_BIT : 0,
+                                      EGL_RED_SIZE,        8,
+                                      EGL_GREEN_SIZE,      8,
+                                      EGL_BLUE_SIZE,       8,
+                                      EGL_ALPHA_SIZE,      8,
+                                      EGL_NONE};
+  EGLConfig config = nullptr;
+  EGLint config_count = 0;
+  if (!eglChooseConfig(display, config_attributes, &config, 1, &config_count) || config_count < 1) {
+    return fail("no RGBA8 OpenGL ES 2 config");
+  }
+  const EGLint context_attributes[] = {EGL_CONTEXT_CLIENT_VERSION, 2, EGL_NONE};
+  EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attributes);
+  if (context == EGL_NO_CONTEXT) return fail("eglCreateContext(ES 2) failed");
+  EGLSurface surface = EGL_NO_SURFACE;
+  if (use_pbuffer) {
+    const EGLint pbuffer_attributes[] = {EGL_WIDTH, 1, EGL_HEIGHT, 1, EGL_NONE};
+    surface = eglCreatePbufferSurface(display, config, pbuffer_attributes);
+    if (surface == EGL_NO_SURFACE) {
+      eglDestroyContext(display, context);
+      return fail("eglCreatePbufferSurface(1x1) failed");
+    }
+  }
+  if (!eglMakeCurrent(display, surface, surface, context)) {
+    if (surface != EGL_NO_SURFACE) eglDestroySurface(display, surface);
+    eglDestroyContext(display, context);
+    return fail("eglMakeCurrent failed");
+  }
+  return std::make_unique<EglContext>(display, config, context, surface,
+                                      use_pbuffer ? EglSurfaceKind::kPbuffer : EglSurfaceKind::kNone, platform_name);
+}
+
+}  // namespace
+
+std::string eglErrorName(EGLint code) {
+  const char* name = "unknown EGL error";
+  switch (code) {
+    case EGL_SUCCESS: name = "EGL_SUCCESS"; break;
+    case EGL_NOT_INITIALIZED: name = "EGL_NOT_INITIALIZED"; break;
+    case EGL_BAD_ACCESS: name = "EGL_BAD_ACCESS"; break;
+    case EGL_BAD_ALLOC: name = "EGL_BAD_ALLOC"; break;
+    case EGL_BAD_ATTRIBUTE: name = "EGL_BAD_ATTRIBUTE"; break;
+    case EGL_BAD_CONFIG: name = "EGL_BAD_CONFIG"; break;
+    case EGL_BAD_CONTEXT: name = "EGL_BAD_CONTEXT"; break;
+    case EGL_BAD_CURRENT_SURFACE: name = "EGL_BAD_CURRENT_SURFACE"; break;
+    case EGL_BAD_DISPLAY: name = "EGL_BAD_DISPLAY"; break;
+    case EGL_BAD_MATCH: name = "EGL_BAD_MATCH"; break;
+    case EGL_BAD_NATIVE_PIXMAP: name = "EGL_BAD_NATIVE_PIXMAP"; break;
+    case EGL_BAD_NATIVE_WINDOW: name = "EGL_BAD_NATIVE_WINDOW"; break;
+    case EGL_BAD_PARAMETER: name = "EGL_BAD_PARAMETER"; break;
+    case EGL_BAD_SURFACE: name = "EGL_BAD_SURFACE"; break;
+    case EGL_CONTEXT_LOST: name = "EGL_CONTEXT_LOST"; break;
+    default: break;
+  }
+  char text[64];
+  std::snprintf(text, sizeof text, "%s (0x%04X)", name, static_cast<unsigned>(code));
+  return text;
+}
+
+EglContext::EglContext(EGLDisplay display, EGLConfig config, EGLContext context, EGLSurface surface,
+                       EglSurfaceKind surface_kind, std::string platform_name)
+    : display_(display),
+      config_(config),
+      context_(context),
+      surface_(surface),
+      surface_kind_(surface_kind),
+      platform_name_(std::move(platform_name)) {}
+
+EglContext::~EglContext() {
+  if (display_ == EGL_NO_DISPLAY) return;
+  eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  if (surface_ != EGL_NO_SURFACE) eglDestroySurface(display_, surface_);
+  if (context_ != EGL_NO_CONTEXT) eglDestroyContext(display_, context_);
+  eglTerminate(display_);
+}
+
+bool EglContext::makeCurrent(std::string& error) const {
+  if (eglMakeCurrent(display_, surface_, surface_, context_)) return true;
+  error = "eglMakeCurrent failed: " + eglErrorName(eglGetError()) +
+          ". Is the context current on another thread? An EGL context can be current on only one thread at a time.";
+  return false;
+}
+
+std::unique_ptr<EglContext> EglContext::createHeadless(std::string& error) {
+  std::string attempts;
+  const char* client_extensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+  auto get_platform_display =
+      reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
+  const bool has_platform_base = get_platform_display != nullptr && hasExtension(client_extensions, "EGL_EXT_platform_base");
+
+  if (has_platform_base && hasExtension(client_extensions, "EGL_MESA_platform_surfaceless")) {
+    std::string why;
+    EGLDisplay display = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+    if (auto context = finishContext(display, false, "surfaceless", why)) return context;
+    attempts += "\n  EGL_MESA_platform_surfaceless: " + why;
+  } else {
+    attempts += "\n  EGL_MESA_platform_surfaceless: not offered by this EGL";
+  }
+
+  if (has_platform_base && hasExtension(client_extensions, "EGL_EXT_platform_device")) {
+    auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    EGLint device_count = 0;
+    if (query_devices != nullptr && query_devices(0, nullptr, &device_count) && device_count > 0) {
+      std::vector<EGLDeviceEXT> devices(static_cast<size_t>(device_count));
+      query_devices(device_count, devices.data(), &device_count);
+      for (EGLint i = 0; i < device_count; ++i) {
+        std::string why;
+        EGLDisplay display = get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[static_cast<size_t>(i)], nullptr);
+        if (auto context = finishContext(display, false, "device", why)) return context;
+        attempts += "\n  EGL_EXT_platform_device #" + std::to_string(i) + ": " + why;
+      }
+    } else {
+      attempts += "\n  EGL_EXT_platform_device: no EGL devices";
+    }
+  } else {
+    attempts += "\n  EGL_EXT_platform_device: not offered by this EGL";
+  }
+
+  {
+    std::string why;
+    if (auto context = finishContext(eglGetDisplay(EGL_DEFAULT_DISPLAY), true, "default+pbuffer", why)) return context;
+    attempts += "\n  eglGetDisplay(EGL_DEFAULT_DISPLAY) + pbuffer: " + why;
+  }
+  error =
+      "Could not create a headless OpenGL ES 2 context. Tried:" + attempts +
+      "\nInstall Mesa's EGL and GLES drivers (Debian: libegl1-mesa, libgles2-mesa, libgl1-mesa-dri), check that "
+      "/dev/dri is readable by this user (group 'render' or 'video'), or set LIBGL_ALWAYS_SOFTWARE=1 to use llvmpipe.";
+  return nullptr;
+}
+
+}  // namespace probelight::gles

@@ -1,0 +1,62 @@
+#include "ibl/mirror_ball.hpp"
+
+#include <cmath>
+
+#include "ibl/camera_projection.hpp"
+
+namespace probelight::ibl {
+
+std::optional<glm::dvec2> reflectedDirectionToPixel(const MirrorBallView& view, const glm::dvec3& reflected_w,
+                                                    int iterations) {
+  const glm::dvec3 camera_center_w = view.pose.cameraCenterWorld();
+  const glm::dvec3 r = glm::normalize(reflected_w);
+  // The seed treats the camera as infinitely far along O - C; each step then
+  // re-aims the view vector from the current surface point, which shrinks the
+  // error by about radius / distance.
+  glm::dvec3 bisector = glm::normalize(camera_center_w - view.center_w) + r;
+  if (glm::length(bisector) < kBlindSpotLength) return std::nullopt;
+  glm::dvec3 normal = glm::normalize(bisector);
+  for (int i = 0; i < iterations; ++i) {
+    const glm::dvec3 surface_w = view.center_w + view.radius_m * normal;
+    bisector = glm::normalize(camera_center_w - surface_w) + r;
+    if (glm::length(bisector) < kBlindSpotLength) return std::nullopt;
+    normal = glm::normalize(bisector);
+  }
+  const glm::dvec3 surface_w = view.center_w + view.radius_m * normal;
+  const glm::dvec3 to_camera = camera_center_w - surface_w;
+  // On a convex ball a point is visible exactly when its normal faces the eye.
+  if (glm::dot(normal, to_camera) <= 0.0) return std::nullopt;
+  const glm::dvec3 surface_cam = view.pose.toCamera(surface_w);
+  if (surface_cam.z <= 0.0) return std::nullopt;
+  return projectToPixel(view.camera, surface_cam);
+}
+
+std::optional<glm::dvec3> pixelToReflectedDirection(const MirrorBallView& view, const glm::dvec2& pixel) {
+  const glm::dvec3 ray_w =
+      glm::normalize(glm::transpose(view.pose.R_cam_from_world) * pixelToCameraRay(view.camera, pixel));
+  const glm::dvec3 origin_w = view.pose.cameraCenterWorld();
+  // |origin + t ray - centre|^2 = radius^2 with |ray| = 1.
+  const glm::dvec3 centre_to_origin = origin_w - view.center_w;
+  const double half_b = glm::dot(ray_w, centre_to_origin);
+  const double c = glm::dot(centre_to_origin, centre_to_origin) - view.radius_m * view.radius_m;
+  const double discriminant = half_b * half_b - c;
+  if (discriminant < 0.0) return std::nullopt;
+  const double t_nearest = -half_b - std::sqrt(discriminant);
+  if (t_nearest <= 0.0) return std::nullopt;  // ball behind the camera, or camera inside it
+  const glm::dvec3 normal = (origin_w + t_nearest * ray_w - view.center_w) / view.radius_m;
+  return glm::normalize(ray_w - 2.0 * glm::dot(ray_w, normal) * normal);
+}
+
+glm::dvec2 orthographicSphereMapPixel(const MirrorBallView& view, const glm::dvec3& reflected_w) {
+  const glm::dmat3& R = view.pose.R_cam_from_world;
+  // Row 2 of R is the camera z axis in W; v points from the ball back to the camera.
+  const glm::dvec3 toward_camera_w = -glm::dvec3(R[0][2], R[1][2], R[2][2]);
+  const glm::dvec3 normal_cam = R * glm::normalize(glm::normalize(reflected_w) + toward_camera_w);
+  const glm::dvec3 center_cam = view.pose.toCamera(view.center_w);
+  const glm::dvec2 center_px = projectToPixel(view.camera, center_cam);
+  const double radius_over_depth = view.radius_m / center_cam.z;
+  return center_px + glm::dvec2(view.camera.fx_px * radius_over_depth * normal_cam.x,
+                                view.camera.fy_px * radius_over_depth * normal_cam.y);
+}
+
+}  // namespace probelight::ibl

@@ -1,0 +1,392 @@
+#include "pipeline/environment_maps.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include <glm/gtc/type_ptr.hpp>
+
+#include "ibl/camera_projection.hpp"
+#include "ibl/color_transfer.hpp"
+
+namespace probelight::pipeline {
+
+namespace {
+
+// The CPU reference samples the camera image at texcoord = pixel / size (its
+// pixel centres at +0.5, ibl/probe_to_cube.cpp). Kept as a named constant so
+// a change of pixel convention there is a one-line change here.
+constexpr double kProbeSamplePixelOffset = 0.0;
+
+struct FaceBasis {
+  glm::vec3 center;
+  glm::vec3 s_axis;
+  glm::vec3 t_axis;
+};
+
+// direction = center + (2s - 1) s_axis + (2t - 1) t_axis, per the GLES cube
+// table (ibl::cubeCoordToDirection).
+constexpr std::array<FaceBasis, 6> kFaceBases{{
+    {{1, 0, 0}, {0, 0, -1}, {0, -1, 0}},
+    {{-1, 0, 0}, {0, 0, 1}, {0, -1, 0}},
+    {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},
+    {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}},
+    {{0, 0, 1}, {1, 0, 0}, {0, -1, 0}},
+    {{0, 0, -1}, {-1, 0, 0}, {0, -1, 0}},
+}};
+
+// Restores the caller's framebuffer and viewport when a stage returns.
+class FramebufferStateGuard {
+ public:
+  FramebufferStateGuard() {
+    glGetIntegerv(GL_FRAMEBUFFER_BINDING, &framebuffer_);
+    glGetIntegerv(GL_VIEWPORT, viewport_.data());
+  }
+  ~FramebufferStateGuard() {
+    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(framebuffer_));
+    glViewport(viewport_[0], viewport_[1], viewport_[2], viewport_[3]);
+  }
+  FramebufferStateGuard(const FramebufferStateGuard&) = delete;
+  FramebufferStateGuard& operator=(const FramebufferStateGuard&) = delete;
+
+ private:
+  GLint framebuffer_ = 0;
+  std::array<GLint, 4> viewport_{};
+};
+
+float halfToFloat(std::uint16_t half) {
+  const std::uint32_t sign = (half >> 15) & 1u;
+  const std::uint32_t exponent = (half >> 10) & 0x1Fu;
+  const std::uint32_t mantissa = half & 0x3FFu;
+  float magnitude;
+  if (exponent == 0) {
+    magnitude = std::ldexp(static_cast<float>(mantissa), -24);
+  } else if (exponent == 31) {
+    magnitude = mantissa == 0 ? INFINITY : NAN;
+  } else {
+    magnitude = std::ldexp(static_cast<float>(mantissa | 0x400u), static_cast<int>(exponent) - 25);
+  }
+  return sign ? -magnitude : magnitude;
+}
+
+std::uint16_t floatToHalf(float value) {
+  // Round to nearest; the values stored are finite and non-negative linear light.
+  std::uint32_t bits;
+  std::memcpy(&bits, &value, sizeof bits);
+  const std::uint32_t sign = (bits >> 16) & 0x8000u;
+  const int exponent = static_cast<int>((bits >> 23) & 0xFFu) - 127 + 15;
+  std::uint32_t mantissa = bits & 0x7FFFFFu;
+  if (exponent <= 0) {
+    if (exponent < -10) return static_cast<std::uint16_t>(sign);
+    mantissa |= 0x800000u;
+    const int shift = 14 - exponent;
+    std::uint32_t half_mantissa = mantissa >> shift;
+    if ((mantissa >> (shift - 1)) & 1u) ++half_mantissa;
+    return static_cast<std::uint16_t>(sign | half_mantissa);
+  }
+  if (exponent >= 31) return static_cast<std::uint16_t>(sign | 0x7C00u);
+  std::uint32_t half = sign | (static_cast<std::uint32_t>(exponent) << 10) | (mantissa >> 13);
+  if (mantissa & 0x1000u) ++half;  // carries into the exponent correctly
+  return static_cast<std::uint16_t>(half);
+}
+
+void setFaceUniforms(const gles::Program& program, int face) {
+  const FaceBasis& basis = kFaceBases[static_cast<size_t>(face)];
+  glUniform3fv(program.uniform("u_face_center"), 1, glm::value_ptr(basis.center));
+  glUniform3fv(program.uniform("u_face_s_axis"), 1, glm::value_ptr(basis.s_axis));
+  glUniform3fv(program.uniform("u_face_t_axis"), 1, glm::value_ptr(basis.t_axis));
+}
+
+}  // namespace
+
+std::string cubeStorageDefines(CubeStorage storage) {
+  return storage == CubeStorage::kSrgb8 ? "#define CUBE_STORAGE_SRGB8 1\n" : "";
+}
+
+bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const EnvironmentMapSettings& settings,
+                           std::string& error) {
+  settings_ = settings;
+  for (int size : {settings.reflection_face_size, settings.intermediate_face_size, settings.diffuse_face_size}) {
+    if (size < 2 || size > capabilities.max_cube_map_size_px) {
+      error = "EnvironmentMaps: cube face size " + std::to_string(size) + " must be in [2, " +
+              std::to_string(capabilities.max_cube_map_size_px) + "] (the GPU's GL_MAX_CUBE_MAP_TEXTURE_SIZE)";
+      return false;
+    }
+  }
+  if (settings.normal_iterations < 0 || settings.normal_iterations > 16 || settings.blur_half_taps < 0 ||
+      settings.blur_half_taps > 32 || !(settings.blur_sigma_rad > 0.0)) {
+    error = "EnvironmentMaps: normal_iterations must be 0..16, blur_half_taps 0..32 and blur_sigma_rad > 0";
+    return false;
+  }
+  framebuffer_ = gles::Framebuffer::create();
+  if (!quad_.init(error)) return false;
+
+  storage_ = CubeStorage::kSrgb8;
+  storage_description_ = "8-bit sRGB";
+  if (capabilities.canRenderHalfFloat()) {
+    // The extensions promise it, but only a complete framebuffer proves it.
+    std::string why;
+    auto probe = gles::createCubeTexture(4, GL_RGBA, GL_HALF_FLOAT_OES, why);
+    GLenum status = GL_NONE;
+    if (probe) {
+      FramebufferStateGuard guard;
+      glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, probe->id(), 0);
+      status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, 0);
+      why = gles::framebufferStatusName(status);
+    }
+    if (status == GL_FRAMEBUFFER_COMPLETE) {
+      storage_ = CubeStorage::kLinearHalfFloat;
+      storage_description_ = "half float";
+    } else {
+      storage_description_ = "8-bit sRGB (half float render target unusable: " + why + ")";
+    }
+  } else {
+    storage_description_ = "8-bit sRGB (no OES_texture_half_float + EXT_color_buffer_half_float)";
+  }
+
+  const std::string storage_defines = cubeStorageDefines(storage_);
+  auto probe_program = gles::Program::fromEmbedded(
+      "cube_face.vert", "probe_to_cube.frag",
+      storage_defines + "#define NORMAL_ITERATIONS " + std::to_string(settings.normal_iterations) + "\n", error);
+  if (!probe_program) return false;
+  probe_program_ = std::move(*probe_program);
+  auto blur_program = gles::Program::fromEmbedded(
+      "cube_face.vert", "spherical_blur.frag",
+      storage_defines + "#define HALF_TAPS " + std::to_string(settings.blur_half_taps) + "\n", error);
+  if (!blur_program) return false;
+  blur_program_ = std::move(*blur_program);
+
+  if (!allocate(reflection_, settings.reflection_face_size, error)) return false;
+  if (!allocate(intermediate_, settings.intermediate_face_size, error)) return false;
+  if (!allocate(diffuse_, settings.diffuse_face_size, error)) return false;
+  return gles::checkGl("EnvironmentMaps::init", error);
+}
+
+bool EnvironmentMaps::allocate(GpuCubeMap& map, int face_size, std::string& error) const {
+  const GLenum type = storage_ == CubeStorage::kLinearHalfFloat ? GL_HALF_FLOAT_OES : GL_UNSIGNED_BYTE;
+  auto texture = gles::createCubeTexture(face_size, GL_RGBA, type, error);
+  if (!texture) return false;
+  map.texture = std::move(*texture);
+  map.face_size = face_size;
+  map.linear_scale = 1.0f;
+  return true;
+}
+
+bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, const ibl::MirrorBallView& view,
+                                       double probe_reflectance, std::string& error) {
+  if (camera_frame.empty()) {
+    error = "EnvironmentMaps::updateReflection: no camera frame uploaded yet";
+    return false;
+  }
+  if (camera_frame.widthPx() != view.camera.width_px || camera_frame.heightPx() != view.camera.height_px) {
+    error = "EnvironmentMaps::updateReflection: camera frame is " + std::to_string(camera_frame.widthPx()) + "x" +
+            std::to_string(camera_frame.heightPx()) + " but the calibration is for " +
+            std::to_string(view.camera.width_px) + "x" + std::to_string(view.camera.height_px) +
+            "; recalibrate or select the calibrated camera mode";
+    return false;
+  }
+  if (!(probe_reflectance > 0.0) || !(view.radius_m > 0.0)) {
+    error = "EnvironmentMaps::updateReflection: probe reflectance and radius must be positive (check rig.yaml)";
+    return false;
+  }
+  const glm::dvec3 center_cam = view.pose.toCamera(view.center_w);
+  if (center_cam.z <= view.radius_m) {
+    error = "EnvironmentMaps::updateReflection: the mirror ball is behind or around the camera (depth " +
+            std::to_string(center_cam.z) + " m); check the pose and rig.yaml's probe_center_w";
+    return false;
+  }
+  const CameraIntrinsics& camera = view.camera;
+  const glm::dvec3 eye_ball = (view.pose.cameraCenterWorld() - view.center_w) / view.radius_m;
+  const glm::dvec2 center_normalized{center_cam.x / center_cam.z, center_cam.y / center_cam.z};
+  const glm::dvec2 center_px = ibl::projectToPixel(camera, center_cam);
+  const glm::dvec2 center_distorted{(center_px.x - camera.cx_px) / camera.fx_px,
+                                    (center_px.y - camera.cy_px) / camera.fy_px};
+  const glm::dvec2 size_px{camera.width_px, camera.height_px};
+  const glm::dvec2 center_texcoord = (center_px + kProbeSamplePixelOffset) / size_px;
+  const glm::dvec2 focal_over_size = glm::dvec2(camera.fx_px, camera.fy_px) / size_px;
+  const glm::mat3 rotation(view.pose.R_cam_from_world);
+  const float storage_scale = static_cast<float>(std::max(1.0, 1.0 / probe_reflectance));
+
+  FramebufferStateGuard guard;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
+  glViewport(0, 0, reflection_.face_size, reflection_.face_size);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  probe_program_.use();
+  glUniform3f(probe_program_.uniform("u_eye_ball"), static_cast<float>(eye_ball.x), static_cast<float>(eye_ball.y),
+              static_cast<float>(eye_ball.z));
+  glUniformMatrix3fv(probe_program_.uniform("u_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
+  glUniform2f(probe_program_.uniform("u_center_normalized"), static_cast<float>(center_normalized.x),
+              static_cast<float>(center_normalized.y));
+  glUniform1f(probe_program_.uniform("u_radius_over_depth"), static_cast<float>(view.radius_m / center_cam.z));
+  glUniform4f(probe_program_.uniform("u_distortion"), static_cast<float>(camera.distortion[0]),
+              static_cast<float>(camera.distortion[1]), static_cast<float>(camera.distortion[2]),
+              static_cast<float>(camera.distortion[3]));
+  glUniform1f(probe_program_.uniform("u_distortion_k3"), static_cast<float>(camera.distortion[4]));
+  glUniform2f(probe_program_.uniform("u_center_distorted"), static_cast<float>(center_distorted.x),
+              static_cast<float>(center_distorted.y));
+  glUniform2f(probe_program_.uniform("u_focal_over_size"), static_cast<float>(focal_over_size.x),
+              static_cast<float>(focal_over_size.y));
+  glUniform2f(probe_program_.uniform("u_center_texcoord"), static_cast<float>(center_texcoord.x),
+              static_cast<float>(center_texcoord.y));
+  glUniform1f(probe_program_.uniform("u_inverse_reflectance"), static_cast<float>(1.0 / probe_reflectance));
+  glUniform1f(probe_program_.uniform("u_storage_scale"), storage_scale);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, camera_frame.texture());
+  glUniform1i(probe_program_.uniform("u_camera"), 0);
+  const GLint position = probe_program_.attribute("a_position");
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face),
+                           reflection_.texture.id(), 0);
+    setFaceUniforms(probe_program_, face);
+    quad_.draw(position);
+  }
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, 0);
+  reflection_.linear_scale = storage_ == CubeStorage::kSrgb8 ? storage_scale : 1.0f;
+  return gles::checkGl("EnvironmentMaps::updateReflection", error);
+}
+
+bool EnvironmentMaps::setReflection(const ibl::CubeMapRGB& reflection, std::string& error) {
+  if (reflection.face_size != reflection_.face_size) {
+    error = "EnvironmentMaps::setReflection: map has " + std::to_string(reflection.face_size) +
+            " px faces, the reflection map is configured for " + std::to_string(reflection_.face_size);
+    return false;
+  }
+  const size_t texel_count = static_cast<size_t>(reflection.face_size) * static_cast<size_t>(reflection.face_size);
+  float brightest = 1.0f;
+  for (const auto& face : reflection.faces) {
+    for (const glm::vec3& texel : face) brightest = std::max({brightest, texel.r, texel.g, texel.b});
+  }
+  const float scale = storage_ == CubeStorage::kSrgb8 ? brightest : 1.0f;
+  glBindTexture(GL_TEXTURE_CUBE_MAP, reflection_.texture.id());
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    const auto& texels = reflection.faces[static_cast<size_t>(face)];
+    const GLenum target = GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face);
+    if (storage_ == CubeStorage::kSrgb8) {
+      std::vector<std::uint8_t> bytes(texel_count * 4u);
+      for (size_t i = 0; i < texel_count; ++i) {
+        for (int c = 0; c < 3; ++c) {
+          const double encoded = ibl::linearToSrgb(static_cast<double>(texels[i][c]) / scale);
+          bytes[4 * i + static_cast<size_t>(c)] = static_cast<std::uint8_t>(std::lround(encoded * 255.0));
+        }
+        bytes[4 * i + 3] = 255;
+      }
+      glTexSubImage2D(target, 0, 0, 0, reflection.face_size, reflection.face_size, GL_RGBA, GL_UNSIGNED_BYTE,
+                      bytes.data());
+    } else {
+      std::vector<std::uint16_t> halves(texel_count * 4u);
+      for (size_t i = 0; i < texel_count; ++i) {
+        for (int c = 0; c < 3; ++c) halves[4 * i + static_cast<size_t>(c)] = floatToHalf(texels[i][c]);
+        halves[4 * i + 3] = floatToHalf(1.0f);
+      }
+      glTexSubImage2D(target, 0, 0, 0, reflection.face_size, reflection.face_size, GL_RGBA, GL_HALF_FLOAT_OES,
+                      halves.data());
+    }
+  }
+  reflection_.linear_scale = scale;
+  return gles::checkGl("glTexSubImage2D(reflection cube)", error);
+}
+
+bool EnvironmentMaps::blurPass(const GpuCubeMap& input, GpuCubeMap& output, bool north, std::string& error) {
+  const double step_rad = settings_.blur_half_taps > 0 ? 3.0 * settings_.blur_sigma_rad / settings_.blur_half_taps : 0.0;
+  FramebufferStateGuard guard;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
+  glViewport(0, 0, output.face_size, output.face_size);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  blur_program_.use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, input.texture.id());
+  glUniform1i(blur_program_.uniform("u_input"), 0);
+  glUniform1f(blur_program_.uniform("u_input_face_size"), static_cast<float>(input.face_size));
+  glUniform1f(blur_program_.uniform("u_input_scale"), input.linear_scale);
+  glUniform1f(blur_program_.uniform("u_output_scale"), input.linear_scale);
+  glUniform1f(blur_program_.uniform("u_north"), north ? 1.0f : 0.0f);
+  glUniform1f(blur_program_.uniform("u_step_rad"), static_cast<float>(step_rad));
+  glUniform1f(blur_program_.uniform("u_sigma_rad"), static_cast<float>(settings_.blur_sigma_rad));
+  const GLint position = blur_program_.attribute("a_position");
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face),
+                           output.texture.id(), 0);
+    setFaceUniforms(blur_program_, face);
+    quad_.draw(position);
+  }
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, 0);
+  output.linear_scale = input.linear_scale;
+  return gles::checkGl(north ? "EnvironmentMaps blur pass (north)" : "EnvironmentMaps blur pass (east)", error);
+}
+
+bool EnvironmentMaps::updateDiffuse(std::string& error) {
+  return blurPass(reflection_, intermediate_, false, error) && blurPass(intermediate_, diffuse_, true, error);
+}
+
+std::optional<ibl::CubeMapRGB> EnvironmentMaps::readCube(const GpuCubeMap& map, std::string& error,
+                                                         std::vector<float>* validity) const {
+  const int n = map.face_size;
+  const size_t texel_count = static_cast<size_t>(n) * static_cast<size_t>(n);
+  ibl::CubeMapRGB cube(n);
+  if (validity != nullptr) validity->assign(texel_count * ibl::kCubeFaceCount, 0.0f);
+  FramebufferStateGuard guard;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  std::vector<float> rgba(texel_count * 4u);
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face),
+                           map.texture.id(), 0);
+    if (storage_ == CubeStorage::kSrgb8) {
+      std::vector<std::uint8_t> bytes(texel_count * 4u);
+      glReadPixels(0, 0, n, n, GL_RGBA, GL_UNSIGNED_BYTE, bytes.data());
+      for (size_t i = 0; i < texel_count; ++i) {
+        for (int c = 0; c < 3; ++c) {
+          rgba[4 * i + static_cast<size_t>(c)] = static_cast<float>(
+              ibl::srgbToLinear(bytes[4 * i + static_cast<size_t>(c)] / 255.0) * map.linear_scale);
+        }
+        rgba[4 * i + 3] = bytes[4 * i + 3] / 255.0f;
+      }
+    } else {
+      // GLES2 guarantees only RGBA/UNSIGNED_BYTE plus one implementation
+      // pair; float buffers offer RGBA/FLOAT (ES3) or RGBA/HALF_FLOAT.
+      GLint read_type = 0;
+      GLint read_format = 0;
+      glGetIntegerv(GL_IMPLEMENTATION_COLOR_READ_TYPE, &read_type);
+      glGetIntegerv(GL_IMPLEMENTATION_COLOR_READ_FORMAT, &read_format);
+      if (read_format == GL_RGBA && (read_type == GL_HALF_FLOAT_OES || read_type == 0x140B /* GL_HALF_FLOAT */)) {
+        std::vector<std::uint16_t> halves(texel_count * 4u);
+        glReadPixels(0, 0, n, n, GL_RGBA, static_cast<GLenum>(read_type), halves.data());
+        for (size_t i = 0; i < halves.size(); ++i) rgba[i] = halfToFloat(halves[i]);
+      } else {
+        glReadPixels(0, 0, n, n, GL_RGBA, GL_FLOAT, rgba.data());
+      }
+    }
+    if (!gles::checkGl("glReadPixels(cube face)", error)) {
+      error += "; this GPU cannot read back its half-float cube maps (run with 8-bit maps to inspect them)";
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, 0);
+      return std::nullopt;
+    }
+    auto& texels = cube.faces[static_cast<size_t>(face)];
+    for (size_t i = 0; i < texel_count; ++i) {
+      texels[i] = glm::vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
+      if (validity != nullptr) (*validity)[static_cast<size_t>(face) * texel_count + i] = rgba[4 * i + 3];
+    }
+  }
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, 0);
+  return cube;
+}
+
+std::optional<ibl::CubeMapRGB> EnvironmentMaps::readReflection(std::string& error, std::vector<float>* validity) const {
+  return readCube(reflection_, error, validity);
+}
+std::optional<ibl::CubeMapRGB> EnvironmentMaps::readIntermediate(std::string& error,
+                                                                 std::vector<float>* validity) const {
+  return readCube(intermediate_, error, validity);
+}
+std::optional<ibl::CubeMapRGB> EnvironmentMaps::readDiffuse(std::string& error, std::vector<float>* validity) const {
+  return readCube(diffuse_, error, validity);
+}
+
+}  // namespace probelight::pipeline

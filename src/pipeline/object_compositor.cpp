@@ -1,0 +1,195 @@
+#include "pipeline/object_compositor.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include <glm/gtc/constants.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+namespace probelight::pipeline {
+
+bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const ObjectCompositorSettings& settings,
+                            CubeStorage storage, std::string& error) {
+  settings_ = settings;
+  storage_ = storage;
+  if (settings.sphere_longitude_segments < 3 || settings.sphere_latitude_segments < 2) {
+    error = "ObjectCompositor: the sphere needs at least 3 longitude and 2 latitude segments";
+    return false;
+  }
+  if (!(settings.near_m > 0.0 && settings.far_m > settings.near_m)) {
+    error = "ObjectCompositor: depth range needs 0 < near_m < far_m";
+    return false;
+  }
+  if (!quad_.init(error)) return false;
+  auto image_program = gles::Program::fromEmbedded("image_quad.vert", "image_quad.frag", "", error);
+  if (!image_program) return false;
+  image_program_ = std::move(*image_program);
+  auto sphere_program = gles::Program::fromEmbedded("sphere_object.vert", "sphere_object.frag",
+                                                    cubeStorageDefines(storage), error);
+  if (!sphere_program) return false;
+  sphere_program_ = std::move(*sphere_program);
+
+  // Unit sphere, latitude rings from the south pole to the north pole.
+  const int columns = settings.sphere_longitude_segments;
+  const int rows = settings.sphere_latitude_segments;
+  std::vector<GLfloat> vertices;
+  vertices.reserve(static_cast<size_t>((columns + 1) * (rows + 1) * 3));
+  for (int row = 0; row <= rows; ++row) {
+    const double polar = glm::pi<double>() * row / rows;
+    for (int column = 0; column <= columns; ++column) {
+      const double azimuth = 2.0 * glm::pi<double>() * column / columns;
+      vertices.push_back(static_cast<GLfloat>(std::sin(polar) * std::cos(azimuth)));
+      vertices.push_back(static_cast<GLfloat>(std::sin(polar) * std::sin(azimuth)));
+      vertices.push_back(static_cast<GLfloat>(-std::cos(polar)));
+    }
+  }
+  // GLES2 core has only 16-bit indices.
+  if ((columns + 1) * (rows + 1) > 65535) {
+    error = "ObjectCompositor: sphere tessellation exceeds 65535 vertices (16-bit indices)";
+    return false;
+  }
+  std::vector<GLushort> indices;
+  for (int row = 0; row < rows; ++row) {
+    for (int column = 0; column < columns; ++column) {
+      const auto a = static_cast<GLushort>(row * (columns + 1) + column);
+      const auto b = static_cast<GLushort>(a + 1);
+      const auto c = static_cast<GLushort>(a + columns + 1);
+      const auto d = static_cast<GLushort>(c + 1);
+      indices.insert(indices.end(), {a, b, d, a, d, c});
+    }
+  }
+  sphere_index_count_ = static_cast<GLsizei>(indices.size());
+  sphere_vertices_ = gles::Buffer::create();
+  glBindBuffer(GL_ARRAY_BUFFER, sphere_vertices_.id());
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GLfloat)), vertices.data(),
+               GL_STATIC_DRAW);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  sphere_indices_ = gles::Buffer::create();
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, sphere_indices_.id());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLushort)), indices.data(),
+               GL_STATIC_DRAW);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
+  overlay_ = gles::Texture();
+  return gles::checkGl("ObjectCompositor::init", error);
+}
+
+void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_frame) {
+  glDepthMask(GL_TRUE);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  image_program_.use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, camera_frame.texture());
+  glUniform1i(image_program_.uniform("u_image"), 0);
+  quad_.draw(image_program_.attribute("a_position"));
+}
+
+bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
+                                        glm::dvec3 centre_w, double radius_m, const ibl::SurfaceMaterial& material,
+                                        const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
+                                        std::string& error) {
+  if (environment.storage() != storage_) {
+    error = "ObjectCompositor: initialised for a different cube map storage than these EnvironmentMaps use";
+    return false;
+  }
+  const GpuCubeMap& diffuse = environment.diffuse();
+  const GpuCubeMap& reflection = environment.reflection();
+  const glm::vec3 eye_w(pose.cameraCenterWorld());
+  const glm::mat3 rotation(pose.R_cam_from_world);
+  const gles::Program& program = sphere_program_;
+  program.use();
+  glUniform3f(program.uniform("u_center_w"), static_cast<float>(centre_w.x), static_cast<float>(centre_w.y),
+              static_cast<float>(centre_w.z));
+  glUniform1f(program.uniform("u_radius_m"), static_cast<float>(radius_m));
+  glUniformMatrix3fv(program.uniform("u_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
+  const glm::vec3 translation(pose.t_cam_from_world);
+  glUniform3fv(program.uniform("u_translation_cam_from_world"), 1, glm::value_ptr(translation));
+  glUniform3fv(program.uniform("u_eye_w"), 1, glm::value_ptr(eye_w));
+  glUniform4f(program.uniform("u_distortion"), static_cast<float>(camera.distortion[0]),
+              static_cast<float>(camera.distortion[1]), static_cast<float>(camera.distortion[2]),
+              static_cast<float>(camera.distortion[3]));
+  glUniform1f(program.uniform("u_distortion_k3"), static_cast<float>(camera.distortion[4]));
+  glUniform2f(program.uniform("u_focal_px"), static_cast<float>(camera.fx_px), static_cast<float>(camera.fy_px));
+  glUniform2f(program.uniform("u_principal_px"), static_cast<float>(camera.cx_px), static_cast<float>(camera.cy_px));
+  glUniform2f(program.uniform("u_image_size_px"), static_cast<float>(camera.width_px),
+              static_cast<float>(camera.height_px));
+  glUniform2f(program.uniform("u_depth_range_m"), static_cast<float>(settings_.near_m),
+              static_cast<float>(settings_.far_m));
+
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, diffuse.texture.id());
+  glUniform1i(program.uniform("u_diffuse_map"), 0);
+  glUniform1f(program.uniform("u_diffuse_face_size"), static_cast<float>(diffuse.face_size));
+  glUniform1f(program.uniform("u_diffuse_scale"), diffuse.linear_scale);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, reflection.texture.id());
+  glUniform1i(program.uniform("u_reflection_map"), 1);
+  glUniform1f(program.uniform("u_reflection_face_size"), static_cast<float>(reflection.face_size));
+  glUniform1f(program.uniform("u_reflection_scale"), reflection.linear_scale);
+  glActiveTexture(GL_TEXTURE0);
+
+  glUniform3fv(program.uniform("u_albedo"), 1, glm::value_ptr(material.albedo));
+  glUniform1f(program.uniform("u_material_ambient"), material.ambient);
+  glUniform1f(program.uniform("u_k_diffuse"), material.k_diffuse);
+  glUniform1f(program.uniform("u_k_specular"), material.k_specular);
+  glUniform1f(program.uniform("u_shininess"), material.shininess);
+  glUniform1f(program.uniform("u_k_reflect"), material.k_reflect);
+  glUniform3fv(program.uniform("u_ambient_rgb"), 1, glm::value_ptr(lighting.ambient_rgb));
+  const glm::vec3 highlight_direction = glm::normalize(lighting.highlight_direction_w);
+  glUniform3fv(program.uniform("u_highlight_direction_w"), 1, glm::value_ptr(highlight_direction));
+  glUniform3fv(program.uniform("u_highlight_rgb"), 1, glm::value_ptr(lighting.highlight_rgb));
+
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_BLEND);
+  // The image's y-down flip mirrors winding, so back-face culling is left off:
+  // a closed sphere is depth-tested correctly either way.
+  glDisable(GL_CULL_FACE);
+  const GLint unit = program.attribute("a_unit");
+  if (unit < 0) {
+    error = "ObjectCompositor: sphere_object.vert has no attribute a_unit";
+    return false;
+  }
+  glBindBuffer(GL_ARRAY_BUFFER, sphere_vertices_.id());
+  glEnableVertexAttribArray(static_cast<GLuint>(unit));
+  glVertexAttribPointer(static_cast<GLuint>(unit), 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, sphere_indices_.id());
+  glDrawElements(GL_TRIANGLES, sphere_index_count_, GL_UNSIGNED_SHORT, nullptr);
+  glDisableVertexAttribArray(static_cast<GLuint>(unit));
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  glDisable(GL_DEPTH_TEST);
+  return gles::checkGl("ObjectCompositor::drawSphereObject", error);
+}
+
+bool ObjectCompositor::drawOverlayRGBA(const std::uint8_t* rgba, int width, int height, std::string& error) {
+  if (rgba == nullptr || width <= 0 || height <= 0) {
+    error = "ObjectCompositor::drawOverlayRGBA: empty overlay";
+    return false;
+  }
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  if (!overlay_.valid() || width != overlay_width_ || height != overlay_height_) {
+    auto texture = gles::createTexture2D(width, height, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, rgba, error);
+    if (!texture) return false;
+    overlay_ = std::move(*texture);
+    overlay_width_ = width;
+    overlay_height_ = height;
+  } else {
+    glBindTexture(GL_TEXTURE_2D, overlay_.id());
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+  }
+  glDisable(GL_DEPTH_TEST);
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  image_program_.use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, overlay_.id());
+  glUniform1i(image_program_.uniform("u_image"), 0);
+  quad_.draw(image_program_.attribute("a_position"));
+  glDisable(GL_BLEND);
+  return gles::checkGl("ObjectCompositor::drawOverlayRGBA", error);
+}
+
+}  // namespace probelight::pipeline

@@ -1,0 +1,36 @@
+#include "sim/scene_config.hpp"
+
+namespace probelight::sim {
+
+SceneConfig defaultScene() {
+  SceneConfig scene;
+  scene.camera.width_px = 640;
+  scene.camera.height_px = 480;
+  scene.camera.fx_px = 600.0;
+  scene.camera.fy_px = 600.0;
+  scene.camera.cx_px = 319.5;
+  scene.camera.cy_px = 239.5;
+  // Mild barrel distortion, like a cheap board camera: about 9 px of
+  // displacement at the image corners, under 1 px within 100 px of the centre.
+  scene.camera.distortion = {-0.06, 0.015, 0.0, 0.0, 0.0};
+  scene.rig = RigGeometry{};
+  scene.rig.tag_family = "tag36h11";
+  scene.rig.tag_id = 0;
+  scene.rig.tag_size_m = 0.10;
+  scene.rig.probe_center_w = {0.12, 0.0, 0.08};
+  scene.rig.probe_radius_m = 0.03;
+  scene.rig.probe_reflectance = 1.0;
+  return scene;
+}
+
+const std::vector<std::string>& environmentNames() {
+  static const std::vector<std::string> names = {"sun_sky", "studio", "overcast", "coloured_wall", "uniform"};
+  return names;
+}
+
+const std::vector<std::string>& cameraPathNames() {
+  static const std::vector<std::string> names = {"static", "orbit", "slow_wobble", "random"};
+  return names;
+}
+
+}  // namespace probelight::sim

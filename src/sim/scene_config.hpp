@@ -1,0 +1,105 @@
+// Everything that describes a simulated scene: camera, rig, environment,
+// lighting over time, camera path, and the sensor model. Plain data, so a test
+// or the app can start from defaultScene() and change one field.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/types.hpp"
+
+namespace probelight::sim {
+
+// Bad scene input (unknown name, unreadable file, value out of range). The
+// message is one line and names the field or file.
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Lighting that changes with the frame index, for tests of map refresh.
+struct LightingScript {
+  // The whole environment (sun, sky, walls, or an HDR file) turns about +Z by
+  // this much per frame, which moves the sun's azimuth.
+  double sun_azimuth_rate_deg_per_frame = 0.0;
+  // A bright soft box fixed in the room, on for frames [lamp_on_frame,
+  // lamp_off_frame). -1 for lamp_on_frame: never; -1 for lamp_off_frame: stays on.
+  std::int64_t lamp_on_frame = -1;
+  std::int64_t lamp_off_frame = -1;
+  double lamp_azimuth_deg = 200.0;   // from +X toward +Y
+  double lamp_elevation_deg = 35.0;  // above the horizon
+  double lamp_width_deg = 20.0;      // extent in azimuth
+  double lamp_height_deg = 20.0;     // extent in elevation
+  // Lamp radiance as a multiple of the environment's mean sky radiance E_up/pi,
+  // so that it is "bright" whatever the environment's units.
+  double lamp_relative_radiance = 40.0;
+  glm::dvec3 lamp_colour{1.0, 0.93, 0.8};
+};
+
+// Camera motion, parameterised by frame index. Angles in degrees; the eye sits
+// at look_at + distance * (cos(el) cos(az), cos(el) sin(az), sin(el)).
+struct CameraPathConfig {
+  std::string name = "orbit";  // one of cameraPathNames()
+  // Unset: halfway between the tag centre and the ball centre.
+  std::optional<glm::dvec3> look_at_w;
+  double distance_m = 0.6;
+  double elevation_deg = 40.0;
+  double azimuth_start_deg = -90.0;  // -90: camera on the -Y side, tag upright, ball on the right
+  // Negative so the default orbit sweeps ~230 deg (about 38 s at 30 fps)
+  // before the ball starts to hide the tag (camera on the +X side).
+  double azimuth_rate_deg_per_frame = -0.2;
+  // slow_wobble: hand-held-like drift around the static pose.
+  double wobble_angle_deg = 2.0;
+  double wobble_distance_m = 0.02;
+  // random: one independent pose per frame, see RandomPoseRange.
+  double random_min_distance_m = 0.45;
+  double random_max_distance_m = 0.75;
+};
+
+struct SceneConfig {
+  CameraIntrinsics camera;
+  RigGeometry rig;
+
+  // Environment: a name from environmentNames() or a lat-long .hdr/.exr file.
+  std::string environment = "sun_sky";
+  double environment_rotation_deg = 0.0;  // about +Z, counter-clockwise seen from above
+  LightingScript lighting;
+
+  CameraPathConfig camera_path;
+
+  // Materials (albedo 0..1). The floor gets a mild smooth texture of +-contrast
+  // around floor_albedo (its mean stays floor_albedo).
+  double tag_black_albedo = 0.04;
+  double tag_white_albedo = 0.85;
+  double floor_albedo = 0.35;
+  double floor_texture_contrast = 0.12;
+  double post_albedo = 0.5;
+  double post_radius_m = 0.003;
+
+  // Sensor. Exposure: camera linear value = radiance * exposure, then clip at 1.
+  // Auto: chosen once (frame 0 lighting) so that an upward-facing 0.85 white
+  // patch reads 0.5 linear.
+  bool auto_exposure = true;
+  double fixed_exposure = 1.0;  // used when auto_exposure is false
+  double noise_sigma_code = 1.5;  // Gaussian, in 8-bit code values, added after sRGB encoding
+  int supersample_per_axis = 2;   // n x n regular sub-pixel samples per pixel
+  std::uint64_t seed = 1;         // noise and random camera poses
+  int render_threads = 2;
+};
+
+// The default: 640x480, f=600 px, mild barrel distortion; tag36h11 id 0 of
+// 0.10 m; a 0.03 m ball at (0.12, 0, 0.08) on a post; sun_sky; a slow orbit at
+// 0.6 m and 40 deg elevation (ball radius ~30 px).
+SceneConfig defaultScene();
+
+// Names accepted for SceneConfig::environment (besides file paths) and for
+// CameraPathConfig::name, for the app's --env / --path choices.
+const std::vector<std::string>& environmentNames();
+const std::vector<std::string>& cameraPathNames();
+
+}  // namespace probelight::sim

@@ -1,0 +1,104 @@
+// AprilTag detection on a luma plane, with corners converted to probelight's
+// conventions (world-corner order, OpenCV pixel centres).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+struct apriltag_detector;
+struct apriltag_family;
+
+namespace probelight::tracking {
+
+// Defaults chosen by measurement at 640x480 on the desktop (x86, 2 shared
+// cores; tests/tracking prints these): median detection + pose time on a
+// kiosk-like frame is 37 ms at quad_decimate 1, 8.5 ms at 2, 3.4 ms at 3 (one
+// thread), 6 ms at 2 with two threads. At 2 with refine_edges, rendered tags
+// down to 25 px across are found with corners within 0.3 px for >= 32 px;
+// at 3, 25 px tags are lost, and without refine_edges the corners are off by
+// up to 1.8 px. The kiosk's tag is 60-200 px across, so 2 leaves margin for
+// steep views and a slower Pi; 3 is the next step if the CPU is short.
+struct TagDetectorSettings {
+  std::string family = "tag36h11";
+  float quad_decimate = 2.0f;      // quads are found on an image this many times smaller
+  int nthreads = 2;                // of the Pi's 4 cores; capture and rendering use the others
+  float quad_sigma = 0.0f;         // Gaussian blur (px) before quad search; >0 for noisy sensors
+  bool refine_edges = true;        // snap decimated edges to full-resolution gradients
+  double decode_sharpening = 0.25; // libapriltag's default
+  // When the two planar-pose solutions' reprojection errors differ by less
+  // than this, the corners cannot tell them apart (detection noise is a few
+  // tenths of a pixel) and the one nearer the previous frame's pose wins.
+  double pose_ambiguity_margin_px = 0.5;
+};
+
+// AprilTag reports pixel coordinates with pixel i spanning [i, i+1), so its
+// centre is at i + 0.5; OpenCV (and probelight) put the centre at i. Measured:
+// an axis-aligned tag whose border starts at pixel column 120 is reported at
+// x = 120.0. probelight coordinate = AprilTag coordinate - kAprilTagPixelOffsetPx.
+inline constexpr double kAprilTagPixelOffsetPx = 0.5;
+
+// libapriltag's corner order p[0..3], relative to the printed tag image
+// (apriltag_to_image, row 0 at its top): bottom-left, bottom-right, top-right,
+// top-left. That is exactly probelight's world order, corner k = image of
+// (-s/2,-s/2,0), (+s/2,-s/2,0), (+s/2,+s/2,0), (-s/2,+s/2,0): the two orders
+// coincide, which tests/tracking checks on rendered and real images.
+inline constexpr std::array<int, 4> kWorldCornerFromAprilTagCorner{0, 1, 2, 3};
+
+struct TagDetection {
+  int id = -1;
+  int hamming = 0;               // bits corrected while decoding
+  double decision_margin = 0.0;  // mean |bit intensity - threshold|; low = doubtful decode
+  // Corner k is the image of world corner k (see kWorldCornerFromAprilTagCorner),
+  // OpenCV pixel convention, distorted (as seen in the frame).
+  std::array<glm::dvec2, 4> corners_px{};
+  glm::dvec2 center_px{0.0};
+};
+
+namespace detail {
+struct FamilyDeleter {
+  void (*destroy)(apriltag_family*) = nullptr;  // the family's own *_destroy
+  void operator()(apriltag_family* family) const;
+};
+struct DetectorDeleter {
+  void operator()(apriltag_detector* detector) const;
+};
+}  // namespace detail
+
+// Owns a libapriltag detector and its family. Not copyable; one thread at a
+// time (the detector keeps its own worker pool of `nthreads`).
+class TagDetector {
+ public:
+  // Throws std::invalid_argument for an unknown family or bad settings.
+  explicit TagDetector(const TagDetectorSettings& settings);
+  ~TagDetector();
+  TagDetector(const TagDetector&) = delete;
+  TagDetector& operator=(const TagDetector&) = delete;
+  TagDetector(TagDetector&&) noexcept;
+  TagDetector& operator=(TagDetector&&) noexcept;
+
+  // Detects every tag of the family on an 8-bit luma plane, read in place
+  // (no copy) with its row stride. A frame too small to hold a tag, or a null
+  // plane, gives no detections. Never throws.
+  std::vector<TagDetection> detect(const std::uint8_t* luma, int width, int height, int stride_bytes);
+
+  const TagDetectorSettings& settings() const { return settings_; }
+  // Smallest width and height detect() looks at: libapriltag crashes on
+  // images that decimate to a pixel or two.
+  int minimumFrameSizePx() const;
+
+ private:
+  TagDetectorSettings settings_;
+  // Declared first so it is destroyed last: the detector borrows the family.
+  std::unique_ptr<apriltag_family, detail::FamilyDeleter> family_;
+  std::unique_ptr<apriltag_detector, detail::DetectorDeleter> detector_;
+};
+
+// Names libapriltag can create (tag36h11, tag25h9, tag16h5, tagStandard41h12, ...).
+std::vector<std::string> availableTagFamilies();
+
+}  // namespace probelight::tracking

@@ -1,0 +1,259 @@
+// Runs the real probelight binary (headless EGL on Mesa, simulated camera or
+// replayed images) and checks what a user gets: exit statuses, report.json,
+// composited frames, and error lines.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "config/camera_file.hpp"
+#include "config/rig_file.hpp"
+#include "sim/scene_config.hpp"
+#include "sim/scene_geometry.hpp"
+#include "sim/world.hpp"
+
+namespace probelight {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_status = -1;
+  std::string stderr_text;
+};
+
+class EndToEnd : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("probelight_e2e_" + std::to_string(getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+
+  CommandResult run(const std::string& args) const {
+    const fs::path err = dir_ / "stderr.txt";
+    const std::string command = std::string(PROBELIGHT_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
+    const int status = std::system(command.c_str());
+    CommandResult result;
+    result.exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(err);
+    std::stringstream text;
+    text << in.rdbuf();
+    result.stderr_text = text.str();
+    return result;
+  }
+
+  nlohmann::json readReport(const fs::path& out) const {
+    std::ifstream in(out / "report.json");
+    return nlohmann::json::parse(in);  // throws, and fails the test, on NaN or malformed JSON
+  }
+
+  fs::path dir_;
+};
+
+// Every number anywhere in the report is finite (JSON cannot even hold NaN;
+// our writer turns non-finite figures into null, which this also rejects for
+// the keys other tools read).
+void expectAllNumbersFinite(const nlohmann::json& value, const std::string& path) {
+  if (value.is_number()) {
+    EXPECT_TRUE(std::isfinite(value.get<double>())) << path;
+  } else if (value.is_object()) {
+    for (const auto& [key, child] : value.items()) expectAllNumbersFinite(child, path + "." + key);
+  } else if (value.is_array()) {
+    for (size_t i = 0; i < value.size(); ++i) expectAllNumbersFinite(value[i], path + "[" + std::to_string(i) + "]");
+  }
+}
+
+TEST_F(EndToEnd, SimulatedRunDrawsTheObjectWhereTheTagSays) {
+  const fs::path out = dir_ / "out";
+  const int frames = 12;
+  const CommandResult result =
+      run("run --source sim --display headless --frames " + std::to_string(frames) + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+
+  const nlohmann::json report = readReport(out);
+  EXPECT_EQ(report["frames"], frames);
+  EXPECT_GT(report["fps"].get<double>(), 0.0);
+  for (const char* stage : {"upload", "detect_pose", "probe_to_cube", "diffuse_blur", "render", "present"}) {
+    ASSERT_TRUE(report["stages"].contains(stage)) << stage;
+    EXPECT_EQ(report["stages"][stage]["runs"].get<int>() + report["stages"][stage]["skipped"].get<int>(), frames)
+        << stage;
+  }
+  expectAllNumbersFinite(report["stages"], "stages");
+  expectAllNumbersFinite(report["accuracy"], "accuracy");
+  for (const char* measure : {"pose_rotation_error_deg", "pose_translation_error_pct", "probe_center_error_px"}) {
+    ASSERT_TRUE(report["accuracy"].contains(measure)) << measure;
+    EXPECT_FALSE(report["accuracy"][measure].is_null()) << measure;
+  }
+  EXPECT_EQ(report["counters"]["calibrations_completed"], 1);
+
+  // The last frame, compared with the simulator's own render of it: the
+  // composite differs from the camera image exactly where the object is.
+  const fs::path last = out / "frame_000011.png";
+  cv::Mat composite_bgr = cv::imread(last.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(composite_bgr.empty()) << last;
+  sim::SceneConfig scene = sim::defaultScene();
+  scene.environment = "studio";  // the run's default (AppSettings)
+  const sim::World world(scene);
+  ImageRGB8 camera_frame;
+  FrameTruth truth;
+  world.render(frames - 1, camera_frame, truth);
+  ASSERT_EQ(composite_bgr.cols, camera_frame.width);
+  ASSERT_EQ(composite_bgr.rows, camera_frame.height);
+
+  cv::Mat camera_rgb(camera_frame.height, camera_frame.width, CV_8UC3, camera_frame.pixels.data());
+  cv::Mat composite_rgb;
+  cv::cvtColor(composite_bgr, composite_rgb, cv::COLOR_BGR2RGB);
+  cv::Mat difference;
+  cv::absdiff(composite_rgb, camera_rgb, difference);
+  cv::Mat difference_max;
+  cv::transform(difference, difference_max, cv::Matx13f(1, 1, 1));
+  // The background is a texel-exact copy of the camera image (texel centres
+  // land on pixel centres), so any change > 3 codes is the object.
+  cv::Mat object_mask = difference_max > 3;
+  cv::morphologyEx(object_mask, object_mask, cv::MORPH_CLOSE, cv::Mat::ones(5, 5, CV_8U));  // fill look-alike pixels
+  const cv::Moments moments = cv::moments(object_mask, true);
+  ASSERT_GT(moments.m00, 100.0) << "no object drawn";
+  const glm::dvec2 drawn_center(moments.m10 / moments.m00, moments.m01 / moments.m00);
+  const double drawn_radius = std::sqrt(moments.m00 / M_PI);
+
+  // Where the truth pose puts a 0.035 m sphere resting on the tag centre
+  // (the default object), by the simulator's own projection.
+  const sim::ProbeOutline expected =
+      sim::probeOutline(scene.camera, truth.pose, glm::dvec3(0.0, 0.0, 0.035), 0.035);
+  ASSERT_TRUE(expected.valid);
+  // Tolerance: the estimated pose is off by ~0.2% of the distance (~0.1 px
+  // here), pixel-centre rasterisation moves an edge by up to 0.5 px, and the
+  // 64x32 tessellation sags by ~0.1 px: 1.0 px for the centre and the radius.
+  EXPECT_NEAR(drawn_center.x, expected.center_px.x, 1.0);
+  EXPECT_NEAR(drawn_center.y, expected.center_px.y, 1.0);
+  EXPECT_NEAR(drawn_radius, expected.radius_px, 1.0);
+
+  // No pixel of the composite is garbage where nothing was drawn: outside the
+  // object (dilated by 2 px for anti-aliasing) the images agree exactly.
+  cv::Mat outside;
+  cv::dilate(object_mask, outside, cv::Mat::ones(5, 5, CV_8U));
+  cv::bitwise_not(outside, outside);
+  double max_outside = 0.0;
+  cv::minMaxLoc(difference_max, nullptr, &max_outside, nullptr, nullptr, outside);
+  EXPECT_LE(max_outside, 1.0);
+}
+
+TEST_F(EndToEnd, FramesWithoutATagStillShowAndSayWhy) {
+  // An all-black, an all-white, and an empty (undecodable) file; a real
+  // frame is not needed to check that nothing crashes and the status is set.
+  const fs::path frames = dir_ / "frames";
+  fs::create_directories(frames);
+  cv::imwrite((frames / "a_black.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(0, 0, 0)));
+  cv::imwrite((frames / "b_white.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(255, 255, 255)));
+  std::ofstream(frames / "c_empty.png").close();
+  cv::imwrite((frames / "d_small.png").string(), cv::Mat(10, 10, CV_8UC3, cv::Scalar(90, 90, 90)));
+  config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
+  config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
+
+  const fs::path out = dir_ / "out";
+  const CommandResult result = run("run --source images --images " + frames.string() + " --camera " +
+                                   (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
+                                   " --frames 0 --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  EXPECT_EQ(report["frames"], 3) << "the empty file is skipped with a warning, the rest are processed";
+  EXPECT_NE(result.stderr_text.find("c_empty.png"), std::string::npos) << result.stderr_text;
+  EXPECT_EQ(report["counters"]["frames_without_tag"], 2);
+  EXPECT_EQ(report["counters"]["frames_wrong_size"], 1);
+  EXPECT_NE(result.stderr_text.find("No tag in view"), std::string::npos) << result.stderr_text;
+  EXPECT_EQ(report["stages"]["probe_to_cube"]["runs"], 0);
+  // The frames were still shown (written), with the status bar on them.
+  cv::Mat black = cv::imread((out / "frame_000000.png").string());
+  ASSERT_FALSE(black.empty());
+  double brightest = 0.0;
+  cv::minMaxLoc(black.reshape(1), nullptr, &brightest);
+  EXPECT_GT(brightest, 200.0) << "status text drawn over the black frame";
+}
+
+TEST_F(EndToEnd, BadInputIsOneLineNamingTheProblemAndExitStatus2) {
+  auto expectOneLineError = [&](const std::string& args, const std::string& must_name) {
+    const CommandResult result = run(args + " --out " + (dir_ / "out").string());
+    EXPECT_EQ(result.exit_status, 2) << args << "\n" << result.stderr_text;
+    EXPECT_NE(result.stderr_text.find(must_name), std::string::npos) << args << "\n" << result.stderr_text;
+    EXPECT_EQ(std::count(result.stderr_text.begin(), result.stderr_text.end(), '\n'), 1)
+        << args << "\n" << result.stderr_text;
+  };
+  expectOneLineError("run --bogus", "--bogus");
+  expectOneLineError("frobnicate", "frobnicate");
+  expectOneLineError("run --frames many", "--frames");
+
+  const fs::path config = dir_ / "probelight.yaml";
+  std::ofstream(config) << "%YAML:1.0\n---\nenvironment_maps:\n  face_sise: 64\n";
+  expectOneLineError("run --config " + config.string(), "face_sise");
+  std::ofstream(config) << "%YAML:1.0\n---\nenvironment_maps:\n  face_size: 3\n";
+  expectOneLineError("run --config " + config.string(), "environment_maps.face_size");
+  std::ofstream(config) << "%YAML:1.0\n---\nenvironment_maps: [unclosed\n";
+  expectOneLineError("run --config " + config.string(), config.string());
+  expectOneLineError("run --config " + (dir_ / "missing.yaml").string(), "missing.yaml");
+  expectOneLineError("run --camera " + (dir_ / "nocamera.yaml").string(), "nocamera.yaml");
+
+  const fs::path rig = dir_ / "rig.yaml";
+  std::ofstream(rig) << "%YAML:1.0\n---\ntag_family: tag36h11\ntag_id: 0\ntag_size: -0.1\nprobe_center: [0.1, 0, "
+                        "0.05]\nprobe_radius: 0.03\n";
+  expectOneLineError("run --rig " + rig.string(), "tag_size");
+  expectOneLineError("run --env nowhere.exr", "nowhere.exr");
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "report.json")) << "nothing ran";
+}
+
+TEST_F(EndToEnd, KeyButtonRecalibratesTheLights) {
+  const fs::path fifo = dir_ / "button";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const fs::path config = dir_ / "probelight.yaml";
+  std::ofstream(config) << "%YAML:1.0\n---\nrecalibration:\n  good_frames: 2\noutput:\n  save_every: 0\n";
+  const fs::path out = dir_ / "out";
+  const fs::path err = dir_ / "stderr.txt";
+  // Start the run in the background; press once the start-up calibration is
+  // done (a press during it would be ignored, by design).
+  const std::string command = std::string(PROBELIGHT_BINARY) + " run --source sim --frames 150 --button key --key-input " +
+                              fifo.string() + " --config " + config.string() + " --out " + out.string() + " 2>" +
+                              err.string();
+  std::thread runner([&] { (void)std::system(command.c_str()); });
+  bool pressed = false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!pressed && std::chrono::steady_clock::now() < deadline) {
+    std::ifstream in(err);
+    std::stringstream text;
+    text << in.rdbuf();
+    if (text.str().find("lights recalibrated") != std::string::npos) {
+      const int fd = open(fifo.c_str(), O_WRONLY);
+      ASSERT_GE(fd, 0);
+      ASSERT_EQ(write(fd, "r\n", 2), 2);
+      close(fd);
+      pressed = true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  runner.join();
+  ASSERT_TRUE(pressed);
+  const nlohmann::json report = readReport(out);
+  EXPECT_EQ(report["counters"]["button_presses_accepted"], 1);
+  EXPECT_EQ(report["counters"]["calibrations_completed"], 2);
+  EXPECT_EQ(report["state_at_end"], "running");
+}
+
+}  // namespace
+}  // namespace probelight

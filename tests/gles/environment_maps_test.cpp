@@ -1,0 +1,308 @@
+// Stages 1-3 on the GPU against the CPU reference (ibl::probeImageToCubeMap,
+// ibl::sphericalBlurPass), for both cube storages.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+
+#include <gtest/gtest.h>
+
+#include "gles_test_support.hpp"
+#include "ibl/mirror_ball.hpp"
+#include "ibl/probe_to_cube.hpp"
+#include "ibl/spherical_blur.hpp"
+#include "pipeline/camera_frame_texture.hpp"
+#include "pipeline/environment_maps.hpp"
+
+namespace probelight {
+namespace {
+
+using test::GpuTest;
+
+constexpr double kProbeReflectance = 0.7;
+
+ibl::MirrorBallView testBallView() {
+  ibl::MirrorBallView view;
+  view.camera = test::testCamera();
+  view.center_w = {0.12, 0.0, 0.08};
+  view.radius_m = 0.03;
+  // Off-axis so the ball sits away from the image centre, where distortion
+  // and perspective both matter.
+  view.pose = test::lookAt({-0.10, -0.42, 0.36}, {0.02, 0.02, 0.02});
+  return view;
+}
+
+// The camera frame of the ball in the analytic environment, rendered from
+// exact per-pixel reflection (ibl::pixelToReflectedDirection); elsewhere a
+// gradient so edge samples pick up something unlike the ball.
+ImageRGB8 renderBallImage(const ibl::MirrorBallView& view) {
+  ImageRGB8 image;
+  image.resize(view.camera.width_px, view.camera.height_px);
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      glm::dvec3 linear{0.05 + 0.4 * x / image.width, 0.3, 0.05 + 0.4 * y / image.height};
+      if (auto reflected = ibl::pixelToReflectedDirection(view, {x, y})) {
+        linear = test::analyticEnvironment(*reflected) * kProbeReflectance;
+      }
+      for (int c = 0; c < 3; ++c) {
+        image.row(y)[3 * x + c] = static_cast<std::uint8_t>(std::lround(ibl::linearToSrgb(linear[c]) * 255.0));
+      }
+    }
+  }
+  return image;
+}
+
+// Max - min of the 2x2 bytes a bilinear sample at `pixel` reads (texcoord =
+// pixel / size, as the CPU reference), per channel, in 8-bit levels.
+glm::dvec3 bilinearNeighbourhoodRange(const ImageRGB8& image, const glm::dvec2& pixel) {
+  const int x0 = std::clamp(static_cast<int>(std::floor(pixel.x - 0.5)), 0, image.width - 1);
+  const int y0 = std::clamp(static_cast<int>(std::floor(pixel.y - 0.5)), 0, image.height - 1);
+  const int x1 = std::min(x0 + 1, image.width - 1);
+  const int y1 = std::min(y0 + 1, image.height - 1);
+  glm::dvec3 range(0.0);
+  for (int c = 0; c < 3; ++c) {
+    const int values[4] = {image.row(y0)[3 * x0 + c], image.row(y0)[3 * x1 + c], image.row(y1)[3 * x0 + c],
+                           image.row(y1)[3 * x1 + c]};
+    range[c] = *std::max_element(values, values + 4) - *std::min_element(values, values + 4);
+  }
+  return range;
+}
+
+struct ProbeComparison {
+  double max_error_levels = 0.0;    // |GPU - CPU| in 8-bit encoded levels
+  double max_excess_levels = -1e9;  // worst (error - tolerance); must stay <= 0
+  int validity_mismatches = 0;
+  int visible_texels = 0;
+  double max_truth_error_levels = 0.0;  // GPU vs the analytic environment
+};
+
+class ProbeToCubeTest : public GpuTest, public ::testing::WithParamInterface<bool> {};
+
+// GPU vs CPU, compared in encoded units e = linearToSrgb(linear * reflectance),
+// i.e. in the camera's own 8-bit scale:
+//  - llvmpipe filters 8-bit textures in fixed point and returns the filtered
+//    value rounded to 8 bits: up to 0.5 level;
+//  - its bilinear weights have 8 fractional bits: up to range / 512 where
+//    `range` is the spread of the four bytes read (large only at the ball's
+//    silhouette, where the image jumps to the background);
+//  - storage: RGBA8 rounds the encoded value again (0.5 level); half floats
+//    keep 11 bits of the linear value, < 0.05 level after encoding;
+//  - fp32 geometry moves the sample by ~1e-4 px, i.e. < range * 1e-4 levels.
+// Tolerance: 1.0 + range / 256 levels (twice the sum of the first two terms'
+// worst cases, covering the storage rounding too).
+TEST_P(ProbeToCubeTest, MatchesCpuReferenceOnASyntheticBall) {
+  const bool force_8bit = GetParam();
+  const gles::Capabilities caps =
+      force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
+  const ibl::MirrorBallView view = testBallView();
+  const ImageRGB8 image = renderBallImage(view);
+  std::string error;
+  pipeline::CameraFrameTexture frame;
+  ASSERT_TRUE(frame.init(caps, error)) << error;
+  ASSERT_TRUE(frame.upload(image, error)) << error;
+  pipeline::EnvironmentMaps maps;
+  ASSERT_TRUE(maps.init(caps, {}, error)) << error;
+  if (!force_8bit && maps.storage() != pipeline::CubeStorage::kLinearHalfFloat) {
+    GTEST_SKIP() << "this GPU cannot render half floats: " << maps.storageDescription();
+  }
+  const auto gpu_start = std::chrono::steady_clock::now();
+  ASSERT_TRUE(maps.updateReflection(frame, view, kProbeReflectance, error)) << error;
+  glFinish();
+  const double gpu_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - gpu_start).count();
+  std::vector<float> validity;
+  const auto gpu = maps.readReflection(error, &validity);
+  ASSERT_TRUE(gpu) << error;
+  ASSERT_TRUE(test::allFinite(*gpu));
+
+  ibl::ProbeToCubeParams params;
+  params.face_size = maps.settings().reflection_face_size;
+  params.probe_reflectance = kProbeReflectance;
+  params.normal_iterations = maps.settings().normal_iterations;
+  const ibl::CubeMapRGB cpu = ibl::probeImageToCubeMap(view, image, params);
+
+  const glm::dvec3 ball_to_camera = glm::normalize(view.pose.cameraCenterWorld() - view.center_w);
+  ProbeComparison result;
+  const int n = params.face_size;
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    for (int y = 0; y < n; ++y) {
+      for (int x = 0; x < n; ++x) {
+        const glm::dvec3 direction = ibl::cubeTexelCenterDirection(face, x, y, n);
+        const auto pixel = ibl::reflectedDirectionToPixel(view, direction, params.normal_iterations);
+        const float alpha = validity[static_cast<size_t>(face * n * n + y * n + x)];
+        const bool gpu_visible = alpha > 0.5f;
+        if (gpu_visible != pixel.has_value()) {
+          ++result.validity_mismatches;
+          continue;
+        }
+        if (!pixel) {
+          // Blind spot: 0, as on the CPU.
+          EXPECT_EQ(gpu->texel(face, x, y), glm::vec3(0.0f));
+          continue;
+        }
+        ++result.visible_texels;
+        const glm::dvec3 range = bilinearNeighbourhoodRange(image, *pixel);
+        for (int c = 0; c < 3; ++c) {
+          const double gpu_levels = 255.0 * ibl::linearToSrgb(gpu->texel(face, x, y)[c] * kProbeReflectance);
+          const double cpu_levels = 255.0 * ibl::linearToSrgb(cpu.texel(face, x, y)[c] * kProbeReflectance);
+          const double error_levels = std::abs(gpu_levels - cpu_levels);
+          result.max_error_levels = std::max(result.max_error_levels, error_levels);
+          result.max_excess_levels = std::max(result.max_excess_levels, error_levels - (1.0 + range[c] / 256.0));
+        }
+        // Independent check against the truth the image was made from, for
+        // directions the ball shows well (within 90 deg of the camera, i.e.
+        // ball normals within 45 deg of the view ray, >= 0.7 of the radius
+        // from the silhouette). Error budget: the camera's own rounding
+        // (0.5 level) plus bilinear interpolation of the environment across
+        // ~0.1 rad per pixel: curvature * step^2 / 8 < 1 level here.
+        if (glm::dot(direction, ball_to_camera) > 0.0) {
+          const glm::dvec3 truth = test::analyticEnvironment(direction) * kProbeReflectance;
+          for (int c = 0; c < 3; ++c) {
+            const double gpu_levels = 255.0 * ibl::linearToSrgb(gpu->texel(face, x, y)[c] * kProbeReflectance);
+            result.max_truth_error_levels =
+                std::max(result.max_truth_error_levels, std::abs(gpu_levels - 255.0 * ibl::linearToSrgb(truth[c])));
+          }
+        }
+      }
+    }
+  }
+  std::printf("[ measure  ] probe->cube %s: max |GPU-CPU| %.3f levels, max vs truth %.3f levels, %d visible, "
+              "%d validity mismatches, %.2f ms GPU (6x%d^2)\n",
+              maps.storageDescription().c_str(), result.max_error_levels, result.max_truth_error_levels,
+              result.visible_texels, result.validity_mismatches, gpu_ms, n);
+  EXPECT_LE(result.max_excess_levels, 0.0);
+  // The ball shows more than half the sphere of directions.
+  EXPECT_GT(result.visible_texels, 3 * n * n);
+  // Visibility flips only where |n . v| ~ 0 within fp32 rounding: a handful
+  // of texels on the blind spot's rim at most.
+  EXPECT_LE(result.validity_mismatches, 4);
+  EXPECT_LT(result.max_truth_error_levels, 2.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Storage, ProbeToCubeTest, ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? std::string("Forced8Bit") : std::string("Native");
+                         });
+
+// A map with a bright lamp (3x the sky) and a dark hole, so the blur moves
+// energy over face edges and the 8-bit path has to use a scale above 1.
+ibl::CubeMapRGB lampEnvironment(int face_size) {
+  ibl::CubeMapRGB cube(face_size);
+  const glm::dvec3 lamp = glm::normalize(glm::dvec3(-0.5, 0.45, 0.74));
+  const glm::dvec3 hole = glm::normalize(glm::dvec3(0.2, -0.9, -0.4));
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    for (int y = 0; y < face_size; ++y) {
+      for (int x = 0; x < face_size; ++x) {
+        const glm::dvec3 d = ibl::cubeTexelCenterDirection(face, x, y, face_size);
+        glm::dvec3 value = test::analyticEnvironment(d);
+        if (glm::dot(d, lamp) > std::cos(0.25)) value += glm::dvec3(3.0, 2.6, 2.0);
+        if (glm::dot(d, hole) > std::cos(0.4)) value = glm::dvec3(0.0);
+        cube.texel(face, x, y) = glm::vec3(value);
+      }
+    }
+  }
+  return cube;
+}
+
+struct BlurComparison {
+  double max_error = 0.0;
+  double max_excess = -1e9;
+};
+
+// Tolerance per texel, in linear units:
+//  - storage of the output: half floats round to 11 significant bits
+//    (relative 2^-11); RGBA8 rounds the encoded value by up to 0.5/255, i.e.
+//    scale * slope(encoded) * 0.5/255 in linear units (slope of the sRGB
+//    decode, up to 2.3 at white);
+//  - fp32 arithmetic in the shader (17 taps, trig, 1/ma) against double on
+//    the CPU: relative ~1e-5 of the input's magnitude; 1e-4 * max input
+//    covers it with margin.
+BlurComparison compareBlur(const ibl::CubeMapRGB& gpu, const ibl::CubeMapRGB& cpu, pipeline::CubeStorage storage,
+                           float linear_scale, double input_max) {
+  BlurComparison result;
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    for (int y = 0; y < cpu.face_size; ++y) {
+      for (int x = 0; x < cpu.face_size; ++x) {
+        for (int c = 0; c < 3; ++c) {
+          const double expected = cpu.texel(face, x, y)[c];
+          const double error = std::abs(gpu.texel(face, x, y)[c] - expected);
+          double tolerance = 1e-4 * input_max;
+          if (storage == pipeline::CubeStorage::kLinearHalfFloat) {
+            tolerance += std::abs(expected) * std::ldexp(1.0, -11);
+          } else {
+            const double encoded = ibl::linearToSrgb(expected / linear_scale);
+            tolerance += linear_scale * test::srgbDecodeSlope(std::min(1.0, encoded + 0.5 / 255.0)) * 0.5 / 255.0;
+          }
+          result.max_error = std::max(result.max_error, error);
+          result.max_excess = std::max(result.max_excess, error - tolerance);
+        }
+      }
+    }
+  }
+  return result;
+}
+
+class SphericalBlurTest : public GpuTest, public ::testing::WithParamInterface<bool> {};
+
+// Each pass is compared with the CPU pass run on exactly what the GPU pass
+// read (the GPU's previous map, read back and decoded), so the errors of one
+// pass do not leak into the next one's tolerance.
+TEST_P(SphericalBlurTest, EachPassMatchesCpuReference) {
+  const bool force_8bit = GetParam();
+  const gles::Capabilities caps =
+      force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
+  std::string error;
+  pipeline::EnvironmentMaps maps;
+  ASSERT_TRUE(maps.init(caps, {}, error)) << error;
+  if (!force_8bit && maps.storage() != pipeline::CubeStorage::kLinearHalfFloat) {
+    GTEST_SKIP() << "this GPU cannot render half floats: " << maps.storageDescription();
+  }
+  ASSERT_TRUE(maps.setReflection(lampEnvironment(maps.settings().reflection_face_size), error)) << error;
+  const auto gpu_start = std::chrono::steady_clock::now();
+  ASSERT_TRUE(maps.updateDiffuse(error)) << error;
+  glFinish();
+  const double gpu_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - gpu_start).count();
+
+  const auto reflection = maps.readReflection(error);
+  ASSERT_TRUE(reflection) << error;
+  const auto intermediate = maps.readIntermediate(error);
+  ASSERT_TRUE(intermediate) << error;
+  const auto diffuse = maps.readDiffuse(error);
+  ASSERT_TRUE(diffuse) << error;
+  ASSERT_TRUE(test::allFinite(*reflection) && test::allFinite(*intermediate) && test::allFinite(*diffuse));
+
+  ibl::SphericalBlurPass pass;
+  pass.sigma_rad = maps.settings().blur_sigma_rad;
+  pass.half_taps = maps.settings().blur_half_taps;
+  pass.axis = ibl::BlurAxis::kEast;
+  const auto cpu_start = std::chrono::steady_clock::now();
+  const ibl::CubeMapRGB cpu_east = ibl::sphericalBlurPass(*reflection, maps.settings().intermediate_face_size, pass);
+  pass.axis = ibl::BlurAxis::kNorth;
+  const ibl::CubeMapRGB cpu_north = ibl::sphericalBlurPass(*intermediate, maps.settings().diffuse_face_size, pass);
+  const double cpu_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cpu_start).count();
+
+  const float scale = maps.diffuse().linear_scale;
+  const BlurComparison east = compareBlur(*intermediate, cpu_east, maps.storage(), scale, 3.9);
+  const BlurComparison north = compareBlur(*diffuse, cpu_north, maps.storage(), scale, 3.9);
+  std::printf("[ measure  ] blur %s (scale %.2f): east max |GPU-CPU| %.2e, north %.2e; GPU %.2f ms, CPU %.2f ms\n",
+              maps.storageDescription().c_str(), scale, east.max_error, north.max_error, gpu_ms, cpu_ms);
+  EXPECT_LE(east.max_excess, 0.0);
+  EXPECT_LE(north.max_excess, 0.0);
+  if (maps.storage() == pipeline::CubeStorage::kSrgb8) {
+    // The lamp (up to 3.9) must survive the 8-bit path instead of clipping at 1.
+    EXPECT_GT(scale, 3.5f);
+  }
+  // The blur must actually spread the lamp: its direction's diffuse value is
+  // far below the lamp's own brightness but well above the sky beside it.
+  const glm::dvec3 lamp = glm::normalize(glm::dvec3(-0.5, 0.45, 0.74));
+  EXPECT_LT(diffuse->sampleNearest(lamp).r, 2.0f);
+  EXPECT_GT(diffuse->sampleNearest(lamp).r, test::analyticEnvironment(lamp).r + 0.1);
+}
+
+INSTANTIATE_TEST_SUITE_P(Storage, SphericalBlurTest, ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? std::string("Forced8Bit") : std::string("Native");
+                         });
+
+}  // namespace
+}  // namespace probelight

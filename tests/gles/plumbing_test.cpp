@@ -1,0 +1,119 @@
+// EGL context, capability probe, shader error reporting and the render
+// target's screen convention, on the real Mesa driver.
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "gles/embedded_shaders.hpp"
+#include "gles/gl_objects.hpp"
+#include "gles/render_target.hpp"
+#include "gles_test_support.hpp"
+#include "pipeline/environment_maps.hpp"
+
+namespace probelight {
+namespace {
+
+using test::GpuTest;
+
+TEST_F(GpuTest, HeadlessContextIsCurrentAndNamesItsPlatform) {
+  EXPECT_EQ(eglGetCurrentContext(), context_->context());
+  const std::string platform = context_->platformName();
+  EXPECT_TRUE(platform == "surfaceless" || platform == "device" || platform == "default+pbuffer") << platform;
+  // A surfaceless context has no surface; the pbuffer fallback must have one.
+  EXPECT_EQ(context_->surfaceKind() == gles::EglSurfaceKind::kNone, context_->surface() == EGL_NO_SURFACE);
+}
+
+TEST_F(GpuTest, CapabilitiesAreCoherent) {
+  const gles::Capabilities& caps = test::sharedCapabilities();
+  EXPECT_FALSE(caps.renderer.empty());
+  EXPECT_NE(caps.version.find("OpenGL ES"), std::string::npos) << caps.version;
+  // GLES 2.0 minimums (section 6.2, table 6.20): 64 px textures, 16 px cube maps.
+  EXPECT_GE(caps.max_texture_size_px, 64);
+  EXPECT_GE(caps.max_cube_map_size_px, 16);
+  // mediump must carry at least 10 mantissa bits (GLSL ES 1.00, 4.5.2).
+  EXPECT_GE(caps.fragment_mediump_mantissa_bits, 10);
+  if (caps.fragment_highp) {
+    EXPECT_GE(caps.fragment_highp_mantissa_bits, 16);
+  }
+  if (caps.canRenderHalfFloat()) {
+    EXPECT_TRUE(caps.texture_half_float);
+  }
+  EXPECT_NE(caps.summary().find(caps.renderer), std::string::npos);
+
+  const gles::Capabilities plain = caps.withoutExtensions();
+  EXPECT_FALSE(plain.canRenderHalfFloat());
+  EXPECT_FALSE(plain.fragment_highp || plain.texture_float || plain.depth_texture || plain.egl_image_external);
+  EXPECT_EQ(plain.max_texture_size_px, caps.max_texture_size_px);
+  EXPECT_NE(plain.summary().find("maps: 8-bit"), std::string::npos);
+  std::cout << "[ caps     ] " << caps.summary() << "\n";
+}
+
+TEST_F(GpuTest, MaskedCapabilitiesSelectThe8BitStorage) {
+  std::string error;
+  pipeline::EnvironmentMaps maps;
+  ASSERT_TRUE(maps.init(test::sharedCapabilities().withoutExtensions(), {}, error)) << error;
+  EXPECT_EQ(maps.storage(), pipeline::CubeStorage::kSrgb8);
+}
+
+TEST_F(GpuTest, ShaderCompileErrorNamesTheFileAndCarriesTheLog) {
+  const std::string vertex = "attribute vec2 a_position;\nvoid main() { gl_Position = vec4(a_position, 0.0, 1.0); }\n";
+  const std::string fragment = "void main() {\n  gl_FragColor = vec4(no_such_symbol);\n}\n";
+  std::string error;
+  auto program = gles::Program::fromSources("ok_test.vert", vertex, "broken_test.frag", fragment, "", error);
+  EXPECT_FALSE(program.has_value());
+  EXPECT_NE(error.find("broken_test.frag"), std::string::npos) << error;
+  EXPECT_NE(error.find("no_such_symbol"), std::string::npos) << error;  // the driver's info log
+  // The log's "N:line" prefix maps to the listed source number.
+  EXPECT_NE(error.find("1=broken_test.frag"), std::string::npos) << error;
+}
+
+TEST_F(GpuTest, MissingEmbeddedShaderIsReportedByName) {
+  std::string error;
+  auto program = gles::Program::fromEmbedded("image_quad.vert", "does_not_exist.frag", "", error);
+  EXPECT_FALSE(program.has_value());
+  EXPECT_NE(error.find("does_not_exist.frag"), std::string::npos) << error;
+}
+
+TEST_F(GpuTest, EveryEmbeddedShaderProgramCompilesForBothStorages) {
+  const auto& shaders = gles::embeddedShaders();
+  ASSERT_TRUE(shaders.count("probe_to_cube.frag") && shaders.count("spherical_blur.frag"));
+  for (const char* defines : {"", "#define CUBE_STORAGE_SRGB8 1\n"}) {
+    std::string error;
+    EXPECT_TRUE(gles::Program::fromEmbedded("cube_face.vert", "probe_to_cube.frag", defines, error)) << error;
+    EXPECT_TRUE(gles::Program::fromEmbedded("cube_face.vert", "spherical_blur.frag", defines, error)) << error;
+    EXPECT_TRUE(gles::Program::fromEmbedded("sphere_object.vert", "sphere_object.frag", defines, error)) << error;
+  }
+}
+
+TEST_F(GpuTest, RenderTargetReadsBackTopRowFirst) {
+  std::string error;
+  gles::RenderTarget target;
+  ASSERT_TRUE(target.init(8, 6, error)) << error;
+  target.bind();
+  glClearColor(0.0f, 0.0f, 1.0f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT);
+  // Window y >= 3 is the upper half under GL's bottom-up window coordinates.
+  glEnable(GL_SCISSOR_TEST);
+  glScissor(0, 3, 8, 3);
+  glClearColor(1.0f, 0.0f, 0.0f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT);
+  glDisable(GL_SCISSOR_TEST);
+  ImageRGB8 image;
+  ASSERT_TRUE(target.readRGB(image, error)) << error;
+  ASSERT_EQ(image.width, 8);
+  ASSERT_EQ(image.height, 6);
+  EXPECT_EQ(image.row(0)[0], 255);  // top row: red
+  EXPECT_EQ(image.row(0)[2], 0);
+  EXPECT_EQ(image.row(5)[0], 0);  // bottom row: blue
+  EXPECT_EQ(image.row(5)[2], 255);
+}
+
+TEST_F(GpuTest, RenderTargetRejectsEmptySizeWithAReason) {
+  std::string error;
+  gles::RenderTarget target;
+  EXPECT_FALSE(target.init(0, 10, error));
+  EXPECT_NE(error.find("0x10"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace probelight

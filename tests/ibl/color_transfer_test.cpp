@@ -1,0 +1,45 @@
+#include "ibl/color_transfer.hpp"
+
+#include <gtest/gtest.h>
+
+namespace probelight::ibl {
+namespace {
+
+TEST(ColorTransfer, KnownPointsOfTheSrgbCurve) {
+  EXPECT_DOUBLE_EQ(srgbToLinear(0.0), 0.0);
+  EXPECT_DOUBLE_EQ(srgbToLinear(1.0), 1.0);
+  EXPECT_DOUBLE_EQ(linearToSrgb(0.0), 0.0);
+  // 1.055 - 0.055 is 1 only up to one rounding step of pow().
+  EXPECT_NEAR(linearToSrgb(1.0), 1.0, 1e-15);
+  // Published value ((0.5 + 0.055) / 1.055)^2.4 = 0.2140411...; 6 decimals given, so 5e-7.
+  EXPECT_NEAR(srgbToLinear(0.5), 0.214041, 5e-7);
+  // The linear segment: 0.04045 / 12.92.
+  EXPECT_NEAR(srgbToLinear(0.02), 0.02 / 12.92, 1e-15);
+}
+
+TEST(ColorTransfer, PiecesMeetAtTheBreakpoint) {
+  // The standard's constants are rounded, so the two pieces meet only to
+  // about 1e-7 in linear light (far below one 8-bit step, 1/255).
+  EXPECT_NEAR(srgbToLinear(0.04045 - 1e-12), srgbToLinear(0.04045 + 1e-12), 1e-7);
+  EXPECT_NEAR(linearToSrgb(0.0031308 - 1e-12), linearToSrgb(0.0031308 + 1e-12), 1e-7);
+}
+
+TEST(ColorTransfer, EveryEightBitCodeRoundTripsAndOrderIsKept) {
+  double previous_linear = -1.0;
+  for (int code = 0; code <= 255; ++code) {
+    const double encoded = code / 255.0;
+    const double linear = srgbToLinear(encoded);
+    // The two formulas are exact inverses; only double rounding remains.
+    EXPECT_NEAR(linearToSrgb(linear), encoded, 1e-12) << "code " << code;
+    EXPECT_GT(linear, previous_linear) << "code " << code;
+    previous_linear = linear;
+  }
+}
+
+TEST(ColorTransfer, OutOfRangeInputsClampLikeAnEightBitTarget) {
+  EXPECT_DOUBLE_EQ(linearToSrgb(4.0), linearToSrgb(1.0));
+  EXPECT_DOUBLE_EQ(srgbToLinear(-0.5), 0.0);
+}
+
+}  // namespace
+}  // namespace probelight::ibl

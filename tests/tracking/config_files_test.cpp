@@ -1,0 +1,344 @@
+// camera.yaml, rig.yaml and the typed reader behind them.
+#include <cmath>
+#include <functional>
+
+#include <apriltag/apriltag.h>
+#include <apriltag/tag16h5.h>
+#include <apriltag/tag25h9.h>
+#include <apriltag/tag36h10.h>
+#include <apriltag/tag36h11.h>
+#include <apriltag/tagCircle21h7.h>
+#include <apriltag/tagCircle49h12.h>
+#include <apriltag/tagCustom48h12.h>
+#include <apriltag/tagStandard41h12.h>
+#include <apriltag/tagStandard52h13.h>
+#include <gtest/gtest.h>
+
+#include "config/camera_file.hpp"
+#include "config/config_reader.hpp"
+#include "config/rig_file.hpp"
+#include "test_support.hpp"
+
+namespace probelight {
+namespace {
+
+using config::ConfigError;
+using config::ConfigReader;
+using testing::TempFolder;
+
+// The shape of camera.yaml OpenCV's calibration sample writes (taken from its
+// left01..14 reference calibration), extra keys and a 5x1 distortion included.
+const char* const kOpenCvCalibration = R"(%YAML:1.0
+---
+calibration_time: "Thu 01 Jan 2015 10:00:00 CET"
+nframes: 13
+image_width: 640
+image_height: 480
+board_width: 9
+board_height: 6
+square_size: 2.5000000372529030e-02
+aspectRatio: 1.
+flags: 2
+camera_matrix: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 5.3591573396163199e+02, 0., 3.4228315473308373e+02, 0.,
+       5.3591573396163199e+02, 2.3557082909788173e+02, 0., 0., 1. ]
+distortion_coefficients: !!opencv-matrix
+   rows: 5
+   cols: 1
+   dt: d
+   data: [ -2.6637260909660682e-01, -3.8588898922304653e-02,
+       1.7831947042852964e-03, -2.8122100441115472e-04,
+       2.3839153080878486e-01 ]
+avg_reprojection_error: 3.9259098975581364e-01
+per_view_reprojection_errors: !!opencv-matrix
+   rows: 2
+   cols: 1
+   dt: f
+   data: [ 1.92965463e-01, 1.18204820e+00 ]
+)";
+
+const char* const kGoodRig = R"(tag_family: tag36h11
+tag_id: 7
+tag_size: 0.08
+probe_center: [0.1, -0.02, 0.03]
+probe_radius: 0.03
+)";
+
+std::string cameraFileWith(const std::string& matrix_data, const std::string& distortion_block,
+                           const std::string& extra = "") {
+  return "image_width: 640\nimage_height: 480\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+         "   data: [" + matrix_data + "]\n" + distortion_block + extra;
+}
+const char* const kPlainMatrix = "600., 0., 320., 0., 600., 240., 0., 0., 1.";
+const char* const kDistortion1x5 =
+    "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [0.1, -0.2, 0.001, 0.002, 0.05]\n";
+
+// Every config error must be one line starting with the file and, where a
+// field is at fault, naming it.
+void expectConfigError(const std::function<void()>& load, const std::string& path, const std::string& field,
+                       const std::string& expected_words = "") {
+  try {
+    load();
+    ADD_FAILURE() << "expected a ConfigError for " << path << " field '" << field << "'";
+  } catch (const ConfigError& error) {
+    std::string message = error.what();
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    EXPECT_EQ(message.rfind(path + ": ", 0), 0u) << message;
+    if (!field.empty()) {
+      EXPECT_NE(message.find("field '" + field + "'"), std::string::npos) << message;
+    }
+    if (!expected_words.empty()) {
+      EXPECT_NE(message.find(expected_words), std::string::npos) << message;
+    }
+  }
+}
+
+TEST(CameraFile, LoadsWhatOpenCvCalibrationWrites) {
+  TempFolder folder;
+  CameraIntrinsics camera = config::loadCameraFile(folder.write("camera.yaml", kOpenCvCalibration));
+  EXPECT_EQ(camera.width_px, 640);
+  EXPECT_EQ(camera.height_px, 480);
+  // Values are parsed from 17-digit decimals, so they must match to the last bit or two.
+  EXPECT_DOUBLE_EQ(camera.fx_px, 535.91573396163199);
+  EXPECT_DOUBLE_EQ(camera.fy_px, 535.91573396163199);
+  EXPECT_DOUBLE_EQ(camera.cx_px, 342.28315473308373);
+  EXPECT_DOUBLE_EQ(camera.cy_px, 235.57082909788173);
+  EXPECT_DOUBLE_EQ(camera.distortion[0], -0.26637260909660682);
+  EXPECT_DOUBLE_EQ(camera.distortion[4], 0.23839153080878486);
+}
+
+TEST(CameraFile, AcceptsFourCoefficientsAndAFlatListWithoutHeader) {
+  TempFolder folder;
+  std::string path = folder.write("camera.yaml", cameraFileWith(kPlainMatrix, "distortion_coefficients: [0.1, -0.2, 0.001, 0.002]\n"));
+  CameraIntrinsics camera = config::loadCameraFile(path);
+  EXPECT_DOUBLE_EQ(camera.distortion[1], -0.2);
+  EXPECT_EQ(camera.distortion[4], 0.0);  // k3 absent means zero
+}
+
+TEST(CameraFile, BoardTemplateLoads) {
+  CameraIntrinsics camera = config::loadCameraFile(testing::testDataPath("../../board/camera.yaml"));
+  EXPECT_EQ(camera.width_px, 640);
+  EXPECT_EQ(camera.height_px, 480);
+  RigGeometry rig = config::loadRigFile(testing::testDataPath("../../board/rig.yaml"));
+  EXPECT_EQ(rig.tag_family, "tag36h11");
+  // The ball rests on the ground in the template.
+  EXPECT_DOUBLE_EQ(rig.probe_center_w.z, rig.probe_radius_m);
+}
+
+TEST(CameraFile, SaveThenLoadRoundTrips) {
+  TempFolder folder;
+  CameraIntrinsics original;
+  original.width_px = 1296;
+  original.height_px = 972;
+  original.fx_px = 1013.2571938475;
+  original.fy_px = 1011.0000000001;
+  original.cx_px = 651.123456789;
+  original.cy_px = 480.987654321;
+  original.distortion = {0.123456789, -0.3456, 1.5e-4, -2.5e-4, 0.098765};
+  std::string path = folder.file("saved.yaml");
+  config::saveCameraFile(path, original);
+  CameraIntrinsics loaded = config::loadCameraFile(path);
+  EXPECT_EQ(loaded.width_px, original.width_px);
+  EXPECT_EQ(loaded.height_px, original.height_px);
+  // OpenCV writes doubles with 17 significant digits, which round-trips exactly.
+  EXPECT_EQ(loaded.fx_px, original.fx_px);
+  EXPECT_EQ(loaded.fy_px, original.fy_px);
+  EXPECT_EQ(loaded.cx_px, original.cx_px);
+  EXPECT_EQ(loaded.cy_px, original.cy_px);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(loaded.distortion[i], original.distortion[i]) << "coefficient " << i;
+}
+
+TEST(CameraFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
+  TempFolder folder;
+  auto load = [](const std::string& path) { return [path] { config::loadCameraFile(path); }; };
+
+  std::string missing = folder.file("does-not-exist.yaml");
+  expectConfigError(load(missing), missing, "", "cannot open");
+
+  std::string malformed = folder.write("malformed.yaml", "image_width: 640\nimage_height: [480, 1\ncamera_matrix: 3\n");
+  expectConfigError(load(malformed), malformed, "", "malformed YAML at line");
+
+  std::string empty = folder.write("empty.yaml", "\n\n");
+  expectConfigError(load(empty), empty, "", "empty");
+
+  std::string no_matrix = folder.write("no_matrix.yaml", "image_width: 640\nimage_height: 480\n" + std::string(kDistortion1x5));
+  expectConfigError(load(no_matrix), no_matrix, "camera_matrix", "missing");
+
+  std::string text_width = folder.write("text_width.yaml", cameraFileWith(kPlainMatrix, kDistortion1x5));
+  {
+    std::string text = cameraFileWith(kPlainMatrix, kDistortion1x5);
+    text.replace(text.find("640"), 3, "wide");
+    folder.write("text_width.yaml", text);
+  }
+  expectConfigError(load(text_width), text_width, "image_width", "expected an integer");
+
+  std::string negative_fx = folder.write("negative_fx.yaml", cameraFileWith("-600., 0., 320., 0., 600., 240., 0., 0., 1.", kDistortion1x5));
+  expectConfigError(load(negative_fx), negative_fx, "camera_matrix", "> 0");
+
+  std::string outside = folder.write("outside.yaml", cameraFileWith("600., 0., 700., 0., 600., 240., 0., 0., 1.", kDistortion1x5));
+  expectConfigError(load(outside), outside, "camera_matrix", "principal point");
+
+  std::string non_finite = folder.write("non_finite.yaml", cameraFileWith("600., 0., 320., 0., .nan, 240., 0., 0., 1.", kDistortion1x5));
+  expectConfigError(load(non_finite), non_finite, "camera_matrix", "finite");
+
+  std::string wrong_shape = folder.write("wrong_shape.yaml", cameraFileWith(kPlainMatrix, "distortion_coefficients: !!opencv-matrix\n   rows: 2\n   cols: 3\n   dt: d\n   data: [0, 0, 0, 0, 0, 0]\n"));
+  expectConfigError(load(wrong_shape), wrong_shape, "distortion_coefficients", "1xN");
+
+  std::string eight_terms = folder.write("eight_terms.yaml", cameraFileWith(kPlainMatrix, "distortion_coefficients: [0.1, 0, 0, 0, 0, 0.3, 0, 0]\n"));
+  expectConfigError(load(eight_terms), eight_terms, "distortion_coefficients", "only k1 k2 p1 p2 k3");
+
+  std::string typo = folder.write("typo.yaml", cameraFileWith(kPlainMatrix, kDistortion1x5, "image_heigth: 480\n"));
+  expectConfigError(load(typo), typo, "image_heigth", "unknown field");
+
+  std::string fisheye = folder.write("fisheye.yaml", cameraFileWith(kPlainMatrix, kDistortion1x5, "fisheye_model: 1\n"));
+  expectConfigError(load(fisheye), fisheye, "fisheye_model", "not supported");
+}
+
+TEST(RigFile, LoadsWithDefaultReflectance) {
+  TempFolder folder;
+  RigGeometry rig = config::loadRigFile(folder.write("rig.yaml", kGoodRig));
+  EXPECT_EQ(rig.tag_family, "tag36h11");
+  EXPECT_EQ(rig.tag_id, 7);
+  EXPECT_DOUBLE_EQ(rig.tag_size_m, 0.08);
+  EXPECT_DOUBLE_EQ(rig.probe_center_w.y, -0.02);
+  EXPECT_DOUBLE_EQ(rig.probe_radius_m, 0.03);
+  EXPECT_EQ(rig.probe_reflectance, 1.0);
+}
+
+TEST(RigFile, SaveThenLoadRoundTrips) {
+  TempFolder folder;
+  RigGeometry original;
+  original.tag_family = "tagStandard41h12";
+  original.tag_id = 1234;
+  original.tag_size_m = 0.1234567;
+  original.probe_center_w = {0.111111111, -0.0987654321, 0.0312345};
+  original.probe_radius_m = 0.0312345;
+  original.probe_reflectance = 0.72;
+  std::string path = folder.file("rig.yaml");
+  config::saveRigFile(path, original);
+  RigGeometry loaded = config::loadRigFile(path);
+  EXPECT_EQ(loaded.tag_family, original.tag_family);
+  EXPECT_EQ(loaded.tag_id, original.tag_id);
+  // 17 significant digits on disk: exact round trip.
+  EXPECT_EQ(loaded.tag_size_m, original.tag_size_m);
+  EXPECT_EQ(loaded.probe_center_w, original.probe_center_w);
+  EXPECT_EQ(loaded.probe_radius_m, original.probe_radius_m);
+  EXPECT_EQ(loaded.probe_reflectance, original.probe_reflectance);
+}
+
+TEST(RigFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
+  TempFolder folder;
+  auto load = [](const std::string& path) { return [path] { config::loadRigFile(path); }; };
+  auto rigWith = [&](const std::string& name, const std::string& from, const std::string& to) {
+    std::string text = kGoodRig;
+    if (!from.empty()) text.replace(text.find(from), from.size(), to);
+    return folder.write(name, text);
+  };
+  std::string family = rigWith("family.yaml", "tag36h11", "tag36h12");
+  expectConfigError(load(family), family, "tag_family", "not one of");
+  std::string id = rigWith("id.yaml", "tag_id: 7", "tag_id: 587");  // tag36h11 has ids 0..586
+  expectConfigError(load(id), id, "tag_id", "out of range");
+  std::string negative_id = rigWith("negative_id.yaml", "tag_id: 7", "tag_id: -1");
+  expectConfigError(load(negative_id), negative_id, "tag_id", "out of range");
+  std::string size = rigWith("size.yaml", "tag_size: 0.08", "tag_size: 0");
+  expectConfigError(load(size), size, "tag_size", "> 0");
+  std::string size_text = rigWith("size_text.yaml", "tag_size: 0.08", "tag_size: ten");
+  expectConfigError(load(size_text), size_text, "tag_size", "expected a number");
+  std::string size_inf = rigWith("size_inf.yaml", "tag_size: 0.08", "tag_size: .inf");
+  expectConfigError(load(size_inf), size_inf, "tag_size", "finite");
+  // OpenCV keeps a comment after an unquoted text value as part of the text.
+  std::string trailing_comment = rigWith("trailing_comment.yaml", "tag_family: tag36h11", "tag_family: tag36h11  # printed");
+  expectConfigError(load(trailing_comment), trailing_comment, "tag_family", "end-of-line comments");
+  std::string center_short = rigWith("center_short.yaml", "[0.1, -0.02, 0.03]", "[0.1, -0.02]");
+  expectConfigError(load(center_short), center_short, "probe_center", "expected 3 numbers");
+  std::string center_nan = rigWith("center_nan.yaml", "[0.1, -0.02, 0.03]", "[0.1, .nan, 0.03]");
+  expectConfigError(load(center_nan), center_nan, "probe_center[1]", "finite");
+  std::string radius_missing = rigWith("radius_missing.yaml", "probe_radius: 0.03\n", "");
+  expectConfigError(load(radius_missing), radius_missing, "probe_radius", "missing");
+  std::string reflectance = folder.write("reflectance.yaml", std::string(kGoodRig) + "probe_reflectance: 0\n");
+  expectConfigError(load(reflectance), reflectance, "probe_reflectance", "(0, 1]");
+  std::string typo = folder.write("typo.yaml", std::string(kGoodRig) + "probe_reflectence: 0.7\n");
+  expectConfigError(load(typo), typo, "probe_reflectence", "unknown field");
+  std::string twice = folder.write("twice.yaml", std::string(kGoodRig) + "tag_id: 8\n");
+  expectConfigError(load(twice), twice, "tag_id", "more than once");
+  std::string not_a_map = folder.write("not_a_map.yaml", "- 1\n- 2\n");
+  expectConfigError(load(not_a_map), not_a_map, "");
+}
+
+TEST(RigFile, SavingAnInvalidRigFailsBeforeWriting) {
+  TempFolder folder;
+  RigGeometry rig;
+  rig.probe_radius_m = -1.0;
+  std::string path = folder.file("rig.yaml");
+  expectConfigError([&] { config::saveRigFile(path, rig); }, path, "probe_radius");
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+TEST(RigFile, FamilyCodeCountsMatchLibapriltag) {
+  struct Family {
+    const char* name;
+    apriltag_family_t* (*create)();
+    void (*destroy)(apriltag_family_t*);
+  };
+  const Family families[] = {
+      {"tag36h11", tag36h11_create, tag36h11_destroy},
+      {"tag36h10", tag36h10_create, tag36h10_destroy},
+      {"tag25h9", tag25h9_create, tag25h9_destroy},
+      {"tag16h5", tag16h5_create, tag16h5_destroy},
+      {"tagCircle21h7", tagCircle21h7_create, tagCircle21h7_destroy},
+      {"tagCircle49h12", tagCircle49h12_create, tagCircle49h12_destroy},
+      {"tagCustom48h12", tagCustom48h12_create, tagCustom48h12_destroy},
+      {"tagStandard41h12", tagStandard41h12_create, tagStandard41h12_destroy},
+      {"tagStandard52h13", tagStandard52h13_create, tagStandard52h13_destroy},
+  };
+  ASSERT_EQ(config::knownTagFamilies().size(), std::size(families));
+  for (const Family& family : families) {
+    apriltag_family_t* created = family.create();
+    auto known = std::find_if(config::knownTagFamilies().begin(), config::knownTagFamilies().end(),
+                              [&](const config::TagFamilyInfo& info) { return info.name == family.name; });
+    ASSERT_NE(known, config::knownTagFamilies().end()) << family.name;
+    EXPECT_EQ(static_cast<uint32_t>(known->code_count), created->ncodes) << family.name;
+    EXPECT_EQ(std::string(created->name), family.name);
+    family.destroy(created);
+  }
+}
+
+TEST(ConfigReader, ReadsNestedSectionsBooleansAndChoices) {
+  ConfigReader file = ConfigReader::fromText(
+      "title: kiosk\nverbose: yes\nsim:\n  env: studio\n  frames: 120\n  jitter_px: 0.5\n  enabled: false\n", "app.yaml");
+  EXPECT_EQ(file.readString("title"), "kiosk");
+  EXPECT_TRUE(file.readBool("verbose", false));
+  ConfigReader sim = file.section("sim");
+  EXPECT_EQ(sim.readString("env", "parking", {"studio", "parking"}), "studio");
+  EXPECT_EQ(sim.readInt("frames", 10, config::Range::atLeast(1)), 120);
+  EXPECT_DOUBLE_EQ(sim.readDouble("jitter_px", 0.0, {0.0, 2.0}), 0.5);
+  EXPECT_FALSE(sim.readBool("enabled", true));
+  EXPECT_EQ(sim.readDouble("absent_with_default", 3.25), 3.25);
+  sim.rejectUnknownFields();
+  file.rejectUnknownFields();
+
+  // An absent section reads as empty: defaults apply, required fields are
+  // reported with their dotted name.
+  ConfigReader display = file.section("display");
+  EXPECT_EQ(display.readInt("width", 800), 800);
+  expectConfigError([&] { display.readString("mode"); }, "app.yaml", "display.mode", "missing");
+}
+
+TEST(ConfigReader, ReportsSectionErrorsWithDottedNames) {
+  ConfigReader file = ConfigReader::fromText("sim:\n  env: studoi\n  envv: x\nlights: 3\n", "app.yaml");
+  ConfigReader sim = file.section("sim");
+  expectConfigError([&] { sim.readString("env", "studio", {"studio", "parking"}); }, "app.yaml", "sim.env", "studoi");
+  expectConfigError([&] { sim.rejectUnknownFields(); }, "app.yaml", "sim.envv", "unknown field");
+  expectConfigError([&] { file.section("lights"); }, "app.yaml", "lights", "expected a section");
+  expectConfigError([&] { file.readBool("lights"); }, "app.yaml", "lights", "true or false");
+  ConfigReader values = ConfigReader::fromText("ratio: 1.5\ncount: 2.5\n", "values.yaml");
+  expectConfigError([&] { values.readDouble("ratio", 0.0, config::Range::openClosed(0.0, 1.0)); }, "values.yaml", "ratio",
+                    "in (0, 1]");
+  expectConfigError([&] { values.readInt("count"); }, "values.yaml", "count", "expected an integer");
+}
+
+}  // namespace
+}  // namespace probelight
