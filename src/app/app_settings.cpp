@@ -56,6 +56,10 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.camera_path = sim.readString("camera_path", settings.sim.camera_path);
   settings.sim.noise_sigma = sim.readDouble("noise_sigma", settings.sim.noise_sigma, Range::closed(0.0, 64.0));
   settings.sim.seed = sim.readInt("seed", settings.sim.seed, Range::atLeast(0));
+  settings.sim.sun_azimuth_rate_deg_per_frame = sim.readDouble(
+      "sun_azimuth_rate_deg_per_frame", settings.sim.sun_azimuth_rate_deg_per_frame, Range::closed(-90.0, 90.0));
+  settings.sim.lamp_on_frame = sim.readInt("lamp_on_frame", settings.sim.lamp_on_frame, Range::atLeast(-1));
+  settings.sim.lamp_off_frame = sim.readInt("lamp_off_frame", settings.sim.lamp_off_frame, Range::atLeast(-1));
   sim.rejectUnknownFields();
 
   ConfigReader output = file.section("output");

@@ -40,6 +40,11 @@ struct SimConfig {
   std::string camera_path = "orbit";
   double noise_sigma = 1.5;  // 8-bit code values
   int seed = 1;
+  // Lighting that changes during the run (for testing map refresh and
+  // recalibration): the environment turning, and a lamp switching.
+  double sun_azimuth_rate_deg_per_frame = 0.0;
+  int lamp_on_frame = -1;   // -1: never
+  int lamp_off_frame = -1;  // -1: stays on
 };
 
 struct AppSettings {

@@ -1,7 +1,7 @@
 // Stage 1: the camera frame as a GL texture.
 // Input: ImageRGB8 (sRGB bytes). Output: an RGB 2D texture, LINEAR,
-// CLAMP_TO_EDGE, image row 0 at t = 0 (so texcoord = pixel / size, with pixel
-// centres at +0.5, as the CPU sampler in ibl/probe_to_cube.cpp assumes).
+// CLAMP_TO_EDGE, image row 0 at t = 0. An OpenCV pixel position p (pixel
+// centres at integers) is sampled at texcoord = (p + 0.5) / size.
 #pragma once
 
 #include <string>

@@ -15,10 +15,11 @@ namespace probelight::pipeline {
 
 namespace {
 
-// The CPU reference samples the camera image at texcoord = pixel / size (its
-// pixel centres at +0.5, ibl/probe_to_cube.cpp). Kept as a named constant so
-// a change of pixel convention there is a one-line change here.
-constexpr double kProbeSamplePixelOffset = 0.0;
+// Pixel positions follow OpenCV's convention (pixel (u, v)'s centre at integer
+// (u, v), as projectToPixel and calibration use), while GL puts texel centres
+// at (i + 0.5) / size; hence texcoord = (pixel + 0.5) / size, as
+// ibl::probeImageToCubeMap assumes.
+constexpr double kPixelCenterToTexelCenter = 0.5;
 
 struct FaceBasis {
   glm::vec3 center;
@@ -206,7 +207,7 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
   const glm::dvec2 center_distorted{(center_px.x - camera.cx_px) / camera.fx_px,
                                     (center_px.y - camera.cy_px) / camera.fy_px};
   const glm::dvec2 size_px{camera.width_px, camera.height_px};
-  const glm::dvec2 center_texcoord = (center_px + kProbeSamplePixelOffset) / size_px;
+  const glm::dvec2 center_texcoord = (center_px + kPixelCenterToTexelCenter) / size_px;
   const glm::dvec2 focal_over_size = glm::dvec2(camera.fx_px, camera.fy_px) / size_px;
   const glm::mat3 rotation(view.pose.R_cam_from_world);
   const float storage_scale = static_cast<float>(std::max(1.0, 1.0 / probe_reflectance));

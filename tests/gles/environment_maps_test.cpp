@@ -54,10 +54,10 @@ ImageRGB8 renderBallImage(const ibl::MirrorBallView& view) {
 }
 
 // Max - min of the 2x2 bytes a bilinear sample at `pixel` reads (texcoord =
-// pixel / size, as the CPU reference), per channel, in 8-bit levels.
+// (pixel + 0.5) / size: OpenCV pixel centres at integers), per channel, in 8-bit levels.
 glm::dvec3 bilinearNeighbourhoodRange(const ImageRGB8& image, const glm::dvec2& pixel) {
-  const int x0 = std::clamp(static_cast<int>(std::floor(pixel.x - 0.5)), 0, image.width - 1);
-  const int y0 = std::clamp(static_cast<int>(std::floor(pixel.y - 0.5)), 0, image.height - 1);
+  const int x0 = std::clamp(static_cast<int>(std::floor(pixel.x)), 0, image.width - 1);
+  const int y0 = std::clamp(static_cast<int>(std::floor(pixel.y)), 0, image.height - 1);
   const int x1 = std::min(x0 + 1, image.width - 1);
   const int y1 = std::min(y0 + 1, image.height - 1);
   glm::dvec3 range(0.0);
@@ -74,6 +74,7 @@ struct ProbeComparison {
   double max_excess_levels = -1e9;  // worst (error - tolerance); must stay <= 0
   int validity_mismatches = 0;
   int visible_texels = 0;
+  int unconverged_texels = 0;
   double max_truth_error_levels = 0.0;  // GPU vs the analytic environment
 };
 
@@ -81,16 +82,16 @@ class ProbeToCubeTest : public GpuTest, public ::testing::WithParamInterface<boo
 
 // GPU vs CPU, compared in encoded units e = linearToSrgb(linear * reflectance),
 // i.e. in the camera's own 8-bit scale:
-//  - llvmpipe filters 8-bit textures in fixed point and returns the filtered
-//    value rounded to 8 bits: up to 0.5 level;
-//  - its bilinear weights have 8 fractional bits: up to range / 512 where
-//    `range` is the spread of the four bytes read (large only at the ball's
-//    silhouette, where the image jumps to the background);
+//  - GLES filters 8-bit textures in fixed point: llvmpipe's lerp returns an
+//    8-bit result (up to 1 level off the exact bilinear value, as a 1-level-
+//    per-pixel ramp shows) and its weights have 8 fractional bits, which adds
+//    up to range / 512, `range` being the spread of the four bytes read
+//    (large only at the ball's silhouette, where the image jumps);
 //  - storage: RGBA8 rounds the encoded value again (0.5 level); half floats
-//    keep 11 bits of the linear value, < 0.05 level after encoding;
+//    keep 11 bits of the linear value (< 0.05 level after encoding), plus
+//    the shader's approximate pow (< 0.1 level measured on a flat image);
 //  - fp32 geometry moves the sample by ~1e-4 px, i.e. < range * 1e-4 levels.
-// Tolerance: 1.0 + range / 256 levels (twice the sum of the first two terms'
-// worst cases, covering the storage rounding too).
+// Tolerance: 1.5 + range / 256 levels.
 TEST_P(ProbeToCubeTest, MatchesCpuReferenceOnASyntheticBall) {
   const bool force_8bit = GetParam();
   const gles::Capabilities caps =
@@ -140,6 +141,16 @@ TEST_P(ProbeToCubeTest, MatchesCpuReferenceOnASyntheticBall) {
           EXPECT_EQ(gpu->texel(face, x, y), glm::vec3(0.0f));
           continue;
         }
+        // Next to the blind spot the ball normal is at grazing incidence and
+        // the fixed-point iteration's gain, (radius / distance) / (2 cos
+        // incidence), exceeds 1: after the shared 4 steps the result has not
+        // converged, and fp32 vs double rounding is amplified rather than
+        // damped. Only converged texels are compared; the rest must be a thin rim.
+        const auto converged_pixel = ibl::reflectedDirectionToPixel(view, direction, 32);
+        if (!converged_pixel || glm::length(*converged_pixel - *pixel) > 0.05) {
+          ++result.unconverged_texels;
+          continue;
+        }
         ++result.visible_texels;
         const glm::dvec3 range = bilinearNeighbourhoodRange(image, *pixel);
         for (int c = 0; c < 3; ++c) {
@@ -147,7 +158,7 @@ TEST_P(ProbeToCubeTest, MatchesCpuReferenceOnASyntheticBall) {
           const double cpu_levels = 255.0 * ibl::linearToSrgb(cpu.texel(face, x, y)[c] * kProbeReflectance);
           const double error_levels = std::abs(gpu_levels - cpu_levels);
           result.max_error_levels = std::max(result.max_error_levels, error_levels);
-          result.max_excess_levels = std::max(result.max_excess_levels, error_levels - (1.0 + range[c] / 256.0));
+          result.max_excess_levels = std::max(result.max_excess_levels, error_levels - (1.5 + range[c] / 256.0));
         }
         // Independent check against the truth the image was made from, for
         // directions the ball shows well (within 90 deg of the camera, i.e.
@@ -167,9 +178,10 @@ TEST_P(ProbeToCubeTest, MatchesCpuReferenceOnASyntheticBall) {
     }
   }
   std::printf("[ measure  ] probe->cube %s: max |GPU-CPU| %.3f levels, max vs truth %.3f levels, %d visible, "
-              "%d validity mismatches, %.2f ms GPU (6x%d^2)\n",
+              "%d validity mismatches, %d unconverged, %.2f ms GPU (6x%d^2)\n",
               maps.storageDescription().c_str(), result.max_error_levels, result.max_truth_error_levels,
-              result.visible_texels, result.validity_mismatches, gpu_ms, n);
+              result.visible_texels, result.validity_mismatches, result.unconverged_texels, gpu_ms, n);
+  EXPECT_LT(result.unconverged_texels, result.visible_texels / 50);
   EXPECT_LE(result.max_excess_levels, 0.0);
   // The ball shows more than half the sphere of directions.
   EXPECT_GT(result.visible_texels, 3 * n * n);
@@ -214,11 +226,14 @@ struct BlurComparison {
 //    (relative 2^-11); RGBA8 rounds the encoded value by up to 0.5/255, i.e.
 //    scale * slope(encoded) * 0.5/255 in linear units (slope of the sRGB
 //    decode, up to 2.3 at white);
-//  - fp32 arithmetic in the shader (17 taps, trig, 1/ma) against double on
-//    the CPU: relative ~1e-5 of the input's magnitude; 1e-4 * max input
-//    covers it with margin.
+//  - fp32 arithmetic in the shader: tap directions carry an error of at most
+//    ~1e-5 rad (single-precision rounding through normalize, cross and the
+//    tap rotation, plus llvmpipe's polynomial sin/cos), which moves each
+//    bilinear sample by up to 1e-5 * face_size texels (ds/dangle <= 1 per
+//    face unit, face = 2 units wide = N texels). Across a hard edge of height
+//    input_max that changes the weighted mean by <= input_max * 1e-5 * N.
 BlurComparison compareBlur(const ibl::CubeMapRGB& gpu, const ibl::CubeMapRGB& cpu, pipeline::CubeStorage storage,
-                           float linear_scale, double input_max) {
+                           float linear_scale, double input_max, int input_face_size) {
   BlurComparison result;
   for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
     for (int y = 0; y < cpu.face_size; ++y) {
@@ -226,7 +241,7 @@ BlurComparison compareBlur(const ibl::CubeMapRGB& gpu, const ibl::CubeMapRGB& cp
         for (int c = 0; c < 3; ++c) {
           const double expected = cpu.texel(face, x, y)[c];
           const double error = std::abs(gpu.texel(face, x, y)[c] - expected);
-          double tolerance = 1e-4 * input_max;
+          double tolerance = input_max * 1e-5 * input_face_size;
           if (storage == pipeline::CubeStorage::kLinearHalfFloat) {
             tolerance += std::abs(expected) * std::ldexp(1.0, -11);
           } else {
@@ -282,15 +297,23 @@ TEST_P(SphericalBlurTest, EachPassMatchesCpuReference) {
   const double cpu_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cpu_start).count();
 
   const float scale = maps.diffuse().linear_scale;
-  const BlurComparison east = compareBlur(*intermediate, cpu_east, maps.storage(), scale, 3.9);
-  const BlurComparison north = compareBlur(*diffuse, cpu_north, maps.storage(), scale, 3.9);
+  float input_max = 0.0f;
+  for (const auto& face : reflection->faces) {
+    for (const glm::vec3& texel : face) input_max = std::max({input_max, texel.r, texel.g, texel.b});
+  }
+  const BlurComparison east = compareBlur(*intermediate, cpu_east, maps.storage(), scale, input_max,
+                                          maps.settings().reflection_face_size);
+  const BlurComparison north = compareBlur(*diffuse, cpu_north, maps.storage(), scale, input_max,
+                                           maps.settings().intermediate_face_size);
   std::printf("[ measure  ] blur %s (scale %.2f): east max |GPU-CPU| %.2e, north %.2e; GPU %.2f ms, CPU %.2f ms\n",
               maps.storageDescription().c_str(), scale, east.max_error, north.max_error, gpu_ms, cpu_ms);
   EXPECT_LE(east.max_excess, 0.0);
   EXPECT_LE(north.max_excess, 0.0);
   if (maps.storage() == pipeline::CubeStorage::kSrgb8) {
-    // The lamp (up to 3.9) must survive the 8-bit path instead of clipping at 1.
-    EXPECT_GT(scale, 3.5f);
+    // The lamp must survive the 8-bit path instead of clipping at 1: the
+    // scale is the brightest texel (read back within one 8-bit step of it).
+    EXPECT_GT(scale, 3.0f);
+    EXPECT_NEAR(input_max, scale, scale * test::srgbDecodeSlope(1.0) / 255.0);
   }
   // The blur must actually spread the lamp: its direction's diffuse value is
   // far below the lamp's own brightness but well above the sky beside it.

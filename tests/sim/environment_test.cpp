@@ -153,3 +153,40 @@ TEST(Names, EveryListedEnvironmentAndPathBuilds) {
 
 }  // namespace
 }  // namespace probelight::sim
+
+namespace probelight::sim {
+namespace {
+
+// The two real HDR worlds in tests/data/env (see tests/data/LICENSES.md) are
+// upright in our lat-long mapping: their light comes from above. Checked on
+// the data, not assumed: the mean radiance of the upper hemisphere exceeds the
+// lower one's, and the brightest direction (sun, stage lamps) is above the
+// horizon. A vertically flipped mapping fails both.
+TEST(RealHdrWorlds, AreUprightAndBrighterAbove) {
+  for (const char* name : {"KernerEnvLatLong.exr", "StageEnvLatLong.exr"}) {
+    const std::string path = std::string(PROBELIGHT_TEST_DATA_DIR) + "/env/" + name;
+    auto environment = makeEnvironment(path);
+    double upper = 0.0, lower = 0.0, brightest = -1.0;
+    glm::dvec3 brightest_direction{0.0};
+    const int rows = 90, cols = 180;
+    for (int row = 0; row < rows; ++row) {
+      for (int col = 0; col < cols; ++col) {
+        const glm::dvec3 dir = directionFromLatLongUv({(col + 0.5) / cols, (row + 0.5) / rows});
+        const glm::dvec3 rgb = environment->radiance(dir);
+        const double y = 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b;
+        const double weight = std::sqrt(std::max(0.0, 1.0 - dir.z * dir.z));  // solid angle ~ sin(theta)
+        (dir.z > 0 ? upper : lower) += y * weight;
+        if (y > brightest) {
+          brightest = y;
+          brightest_direction = dir;
+        }
+      }
+    }
+    EXPECT_GT(upper, 1.5 * lower) << name;
+    EXPECT_GT(brightest_direction.z, 0.1) << name;
+    EXPECT_GT(brightest, 100.0) << name << ": HDR values survive loading (peaks are in the thousands)";
+  }
+}
+
+}  // namespace
+}  // namespace probelight::sim

@@ -370,22 +370,14 @@ TEST(RgbToLuma, UsesRec601WeightsInRgbOrder) {
   EXPECT_TRUE(luma.empty());
 }
 
-double medianMs(std::vector<double> samples) {
-  std::sort(samples.begin(), samples.end());
-  return samples[samples.size() / 2];
-}
-
-TEST(TagTrackerTiming, MedianDetectionAndPoseTimeAt640x480) {
+// Speed is measured in bench/ (detect_pose), not here. This checks that the
+// speed settings the bench compares all still find a kiosk-sized tag.
+TEST(TagTrackerSettings, KioskTagIsFoundAtEverySpeedSetting) {
   TagScene scene;
   scene.camera = boardCamera();
   scene.noise_sigma = 2.0;
   scene.pose = orbitPose(0.5, 40.0, -90.0);
   cv::Mat kiosk_frame = testing::renderTagScene(scene);
-  // A cluttered real scene: the middle 640x480 of a photo with many tags.
-  cv::Mat photo = cv::imread(testing::testDataPath("apriltag-photos/34085369442_304b6bafd9_c.jpg"), cv::IMREAD_GRAYSCALE);
-  ASSERT_FALSE(photo.empty());
-  cv::Mat cluttered = photo(cv::Rect((photo.cols - 640) / 2, (photo.rows - 480) / 2, 640, 480)).clone();
-
   struct Variant {
     const char* what;
     float quad_decimate;
@@ -400,23 +392,9 @@ TEST(TagTrackerTiming, MedianDetectionAndPoseTimeAt640x480) {
     settings.quad_decimate = variant.quad_decimate;
     settings.nthreads = variant.nthreads;
     TagTracker tracker(settings, rigFor(scene), scene.camera);
-    for (const cv::Mat* frame : {&kiosk_frame, &cluttered}) {
-      std::vector<double> samples_ms;
-      TagTrackResult result;
-      for (int repeat = 0; repeat < 15; ++repeat) {
-        auto start = std::chrono::steady_clock::now();
-        result = tracker.track(frame->data, frame->cols, frame->rows, static_cast<int>(frame->step));
-        samples_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-      }
-      // Timing is printed, not asserted. The kiosk tag (~110 px) must be found
-      // at every setting; the photo's 15-40 px tags are lost at decimate 3.
-      if (frame == &kiosk_frame) {
-        EXPECT_TRUE(result.found) << variant.what << ": " << result.status;
-      }
-      std::printf("[ timing ] %-22s %-16s median %6.2f ms (decimate %.1f, %d threads, tag %s)\n", variant.what,
-                  frame == &kiosk_frame ? "kiosk frame" : "cluttered photo", medianMs(samples_ms), variant.quad_decimate,
-                  variant.nthreads, result.found ? "found" : "not found");
-    }
+    const TagTrackResult result =
+        tracker.track(kiosk_frame.data, kiosk_frame.cols, kiosk_frame.rows, static_cast<int>(kiosk_frame.step));
+    EXPECT_TRUE(result.found) << variant.what << ": " << result.status;
   }
 }
 

@@ -1,0 +1,673 @@
+// Milliseconds per pipeline stage against the stage's error, side by side in
+// one run (docs/benchmarks.md has how to run it and what it measured).
+//
+// Set-up (outside every timed loop, done once on first use): a few frames of
+// the default simulated scene with the "studio" environment, their truth, and
+// one headless EGL context shared by every GL benchmark. Each benchmark
+// computes its error counters once per configuration (cached, so repetitions
+// and Google Benchmark's iteration-count probing do not redo them) and
+// reports them as counters; the same numbers are printed as a plain table at
+// the end, since the console reporter shows small counter values with SI
+// prefixes (0.012 -> "12m").
+//
+// Map benchmarks use the simulator's true pose, so tracking error is not mixed
+// into the map error; detect_pose measures the tracking error on its own.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <GLES2/gl2.h>
+#include <benchmark/benchmark.h>
+#include <glm/glm.hpp>
+
+#include "core/types.hpp"
+#include "gles/capabilities.hpp"
+#include "gles/egl_context.hpp"
+#include "gles/render_target.hpp"
+#include "ibl/cube_map.hpp"
+#include "ibl/irradiance.hpp"
+#include "ibl/mirror_ball.hpp"
+#include "ibl/probe_outline.hpp"
+#include "ibl/probe_to_cube.hpp"
+#include "ibl/spherical_blur.hpp"
+#include "ibl/surface_shading.hpp"
+#include "pipeline/camera_frame_texture.hpp"
+#include "pipeline/environment_maps.hpp"
+#include "pipeline/object_compositor.hpp"
+#include "sim/scene_config.hpp"
+#include "sim/world.hpp"
+#include "tracking/tag_tracker.hpp"
+
+namespace probelight::bench {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRadToDeg = 180.0 / kPi;
+
+// Frames of the default orbit (-0.2 deg of azimuth per frame): 0, 12, 24 and
+// 36 degrees round from the start, all with the tag and the ball in view.
+constexpr std::uint64_t kFrameIndices[] = {0, 60, 120, 180};
+// Reflection-map texels are compared with the truth only within this angle of
+// the direction from the ball back toward the camera (as the kiosk's run
+// report does). Beyond it the ball shows the direction only in a thin ring at
+// its rim, where one camera pixel covers tens of degrees, and straight behind
+// the ball (180 deg) is the blind spot it cannot show at all.
+constexpr double kMainConeDeg = 100.0;
+constexpr double kNarrowConeDeg = 60.0;
+// Normals for the diffuse map check: up and the four horizontals.
+const glm::dvec3 kNormals[] = {{0, 0, 1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+
+double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+
+struct Frame {
+  std::uint64_t index = 0;
+  ImageRGB8 rgb;
+  FrameTruth truth;
+  std::vector<std::uint8_t> luma;
+  ibl::MirrorBallView view;  // true pose
+  glm::dvec3 to_camera_w{0.0};
+};
+
+struct Setup {
+  sim::SceneConfig scene;
+  std::unique_ptr<sim::World> world;
+  std::vector<Frame> frames;
+  std::unique_ptr<gles::EglContext> context;
+  gles::Capabilities capabilities_full;
+  gles::Capabilities capabilities_8bit;
+  std::string gl_error;  // non-empty: no GL benchmarks
+  // Clipped radiance truth per reflection face size, face-major like CubeMapRGB.
+  std::map<int, std::vector<glm::dvec3>> radiance_truth;
+  double irradiance_truth[5] = {};  // luminance of the clipped truth, per kNormals
+  double irradiance_truth_hdr[5] = {};
+};
+
+Setup& setup() {
+  static Setup* instance = [] {
+    auto* s = new Setup;
+    s->scene = sim::defaultScene();
+    s->scene.environment = "studio";
+    s->world = std::make_unique<sim::World>(s->scene);
+    for (std::uint64_t index : kFrameIndices) {
+      Frame frame;
+      frame.index = index;
+      s->world->render(index, frame.rgb, frame.truth);
+      tracking::rgbToLuma(frame.rgb, frame.luma);
+      frame.view = ibl::MirrorBallView{s->scene.camera, frame.truth.pose, s->scene.rig.probe_center_w,
+                                       s->scene.rig.probe_radius_m};
+      frame.to_camera_w = glm::normalize(frame.truth.pose.cameraCenterWorld() - s->scene.rig.probe_center_w);
+      std::fprintf(stderr, "setup: frame %llu: ball radius %.1f px, tag %s, ball %s\n",
+                   static_cast<unsigned long long>(index), frame.truth.probe_radius_px,
+                   frame.truth.tag_fully_visible ? "in view" : "NOT fully in view",
+                   frame.truth.probe_fully_visible ? "in view" : "NOT fully in view");
+      s->frames.push_back(std::move(frame));
+    }
+    // The scene has no lighting script, so every frame has the same lighting
+    // state and one truth serves all frames.
+    for (int i = 0; i < 5; ++i) {
+      const sim::IrradianceTruth truth = s->world->irradiance(kNormals[i], 0);
+      s->irradiance_truth[i] = luminance(truth.clipped);
+      s->irradiance_truth_hdr[i] = luminance(truth.hdr);
+    }
+    s->context = gles::EglContext::createHeadless(s->gl_error);
+    if (s->context) {
+      s->capabilities_full = gles::probeCapabilities();
+      s->capabilities_8bit = s->capabilities_full.withoutExtensions();
+      std::fprintf(stderr, "setup: GL: %s (%s)\n", s->capabilities_full.summary().c_str(),
+                   s->context->platformName().c_str());
+    } else {
+      std::fprintf(stderr, "setup: no GL context, GL benchmarks will be skipped: %s\n", s->gl_error.c_str());
+    }
+    return s;
+  }();
+  return *instance;
+}
+
+const std::vector<glm::dvec3>& radianceTruth(int face_size) {
+  Setup& s = setup();
+  auto found = s.radiance_truth.find(face_size);
+  if (found != s.radiance_truth.end()) return found->second;
+  std::vector<glm::dvec3> truth(static_cast<size_t>(ibl::kCubeFaceCount) * face_size * face_size);
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face)
+    for (int y = 0; y < face_size; ++y)
+      for (int x = 0; x < face_size; ++x)
+        truth[(static_cast<size_t>(face) * face_size + y) * face_size + x] =
+            s.world->radiance(ibl::cubeTexelCenterDirection(face, x, y, face_size), 0).clipped;
+  return s.radiance_truth.emplace(face_size, std::move(truth)).first->second;
+}
+
+bool requireGl(benchmark::State& state) {
+  Setup& s = setup();
+  std::string error;
+  if (!s.context) {
+    state.SkipWithError(("no headless EGL context: " + s.gl_error).c_str());
+    return false;
+  }
+  if (!s.context->makeCurrent(error)) {
+    state.SkipWithError(error.c_str());
+    return false;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------
+// Error summaries, computed once per configuration and printed at the end.
+
+struct ErrorRow {
+  std::string name;
+  std::vector<std::pair<std::string, double>> values;
+};
+std::map<std::string, ErrorRow>& errorTable() {
+  static std::map<std::string, ErrorRow> table;
+  return table;
+}
+
+// Returns the cached row, computing it on first use.
+const ErrorRow& errorsFor(const std::string& name, const std::function<ErrorRow()>& compute) {
+  auto& table = errorTable();
+  auto found = table.find(name);
+  if (found != table.end()) return found->second;
+  ErrorRow row = compute();
+  row.name = name;
+  return table.emplace(name, std::move(row)).first->second;
+}
+
+void setCounters(benchmark::State& state, const ErrorRow& row) {
+  for (const auto& [key, value] : row.values) state.counters[key] = value;
+}
+
+// ---------------------------------------------------------------------------
+// 1. detect_pose
+
+tracking::TagTracker makeTracker(int quad_decimate, int threads) {
+  Setup& s = setup();
+  tracking::TagDetectorSettings settings;
+  settings.family = s.scene.rig.tag_family;
+  settings.quad_decimate = static_cast<float>(quad_decimate);
+  settings.nthreads = threads;
+  return tracking::TagTracker(settings, s.scene.rig, s.scene.camera);
+}
+
+void detectPose(benchmark::State& state, int quad_decimate, int threads) {
+  Setup& s = setup();
+  const std::string name = "detect_pose/decimate:" + std::to_string(quad_decimate) +
+                           "/threads:" + std::to_string(threads);
+  // Errors: a fresh tracker over the frames in order, once.
+  const ErrorRow& row = errorsFor(name, [&] {
+    tracking::TagTracker tracker = makeTracker(quad_decimate, threads);
+    double rotation_sum = 0.0, translation_sum = 0.0, rotation_max = 0.0;
+    int found = 0;
+    for (const Frame& frame : s.frames) {
+      const tracking::TagTrackResult result =
+          tracker.track(frame.luma.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
+      if (!result.found) continue;
+      ++found;
+      const double rotation =
+          tracking::rotationDifferenceDeg(result.pose.R_cam_from_world, frame.truth.pose.R_cam_from_world);
+      rotation_sum += rotation;
+      rotation_max = std::max(rotation_max, rotation);
+      translation_sum += 100.0 * glm::length(result.pose.t_cam_from_world - frame.truth.pose.t_cam_from_world) /
+                         glm::length(frame.truth.pose.t_cam_from_world);
+    }
+    ErrorRow r;
+    r.values = {{"rot_err_deg", found ? rotation_sum / found : NAN},
+                {"rot_err_max_deg", rotation_max},
+                {"trans_err_pct", found ? translation_sum / found : NAN},
+                {"found_pct", 100.0 * found / static_cast<double>(s.frames.size())}};
+    return r;
+  });
+  tracking::TagTracker tracker = makeTracker(quad_decimate, threads);
+  size_t next = 0;
+  for (auto _ : state) {
+    const Frame& frame = s.frames[next];
+    next = (next + 1) % s.frames.size();
+    tracking::TagTrackResult result =
+        tracker.track(frame.luma.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
+    benchmark::DoNotOptimize(result);
+  }
+  setCounters(state, row);
+}
+
+// ---------------------------------------------------------------------------
+// 2. probe_to_cube (GPU)
+
+struct ReflectionErrors {
+  double cone_main = 0.0;    // within kMainConeDeg of the camera side
+  double cone_narrow = 0.0;  // within kNarrowConeDeg
+  double all_valid = 0.0;    // every texel the stage marked valid (rim included)
+  double valid_fraction = 0.0;
+};
+
+// sum |lum(map) - lum(truth)| / sum lum(truth), over texel sets.
+ReflectionErrors compareReflection(const ibl::CubeMapRGB& map, const std::vector<float>& validity,
+                                   const std::vector<glm::dvec3>& truth, const glm::dvec3& to_camera) {
+  const double main_cos = std::cos(kMainConeDeg / kRadToDeg);
+  const double narrow_cos = std::cos(kNarrowConeDeg / kRadToDeg);
+  double abs_main = 0, truth_main = 0, abs_narrow = 0, truth_narrow = 0, abs_valid = 0, truth_valid = 0;
+  size_t valid = 0, total = 0;
+  const int n = map.face_size;
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    for (int y = 0; y < n; ++y) {
+      for (int x = 0; x < n; ++x) {
+        const size_t i = (static_cast<size_t>(face) * n + y) * n + x;
+        const double estimated = luminance(glm::dvec3(map.texel(face, x, y)));
+        const double expected = luminance(truth[i]);
+        const double difference = std::abs(estimated - expected);
+        const double cosine = glm::dot(ibl::cubeTexelCenterDirection(face, x, y, n), to_camera);
+        ++total;
+        if (validity[i] > 0.5f) {
+          ++valid;
+          abs_valid += difference;
+          truth_valid += expected;
+        }
+        if (cosine >= main_cos) {
+          abs_main += difference;
+          truth_main += expected;
+        }
+        if (cosine >= narrow_cos) {
+          abs_narrow += difference;
+          truth_narrow += expected;
+        }
+      }
+    }
+  }
+  return {abs_main / truth_main, abs_narrow / truth_narrow, abs_valid / truth_valid,
+          static_cast<double>(valid) / static_cast<double>(total)};
+}
+
+// Mean |lum(gpu) - lum(cpu)| / mean lum(cpu) within the main cone.
+double compareWithCpu(const ibl::CubeMapRGB& gpu, const ibl::CubeMapRGB& cpu, const glm::dvec3& to_camera) {
+  const double main_cos = std::cos(kMainConeDeg / kRadToDeg);
+  double abs_sum = 0.0, cpu_sum = 0.0;
+  const int n = gpu.face_size;
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        if (glm::dot(ibl::cubeTexelCenterDirection(face, x, y, n), to_camera) < main_cos) continue;
+        abs_sum += std::abs(luminance(glm::dvec3(gpu.texel(face, x, y))) - luminance(glm::dvec3(cpu.texel(face, x, y))));
+        cpu_sum += luminance(glm::dvec3(cpu.texel(face, x, y)));
+      }
+  return abs_sum / cpu_sum;
+}
+
+const ibl::CubeMapRGB& cpuReflection(int face_size, int iterations) {
+  static std::map<std::pair<int, int>, ibl::CubeMapRGB> cache;
+  const auto key = std::make_pair(face_size, iterations);
+  auto found = cache.find(key);
+  if (found != cache.end()) return found->second;
+  Setup& s = setup();
+  ibl::ProbeToCubeParams params;
+  params.face_size = face_size;
+  params.normal_iterations = iterations;
+  params.probe_reflectance = s.scene.rig.probe_reflectance;
+  return cache.emplace(key, ibl::probeImageToCubeMap(s.frames[0].view, s.frames[0].rgb, params)).first->second;
+}
+
+// Camera frames as textures, one per frame, for one capability set.
+struct FrameTextures {
+  std::vector<std::unique_ptr<pipeline::CameraFrameTexture>> textures;
+  bool init(const gles::Capabilities& capabilities, std::string& error) {
+    for (const Frame& frame : setup().frames) {
+      auto texture = std::make_unique<pipeline::CameraFrameTexture>();
+      if (!texture->init(capabilities, error) || !texture->upload(frame.rgb, error)) return false;
+      textures.push_back(std::move(texture));
+    }
+    return true;
+  }
+};
+
+void probeToCube(benchmark::State& state, bool eight_bit, int face_size, int iterations) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  const gles::Capabilities& capabilities = eight_bit ? s.capabilities_8bit : s.capabilities_full;
+  std::string error;
+  FrameTextures frames;
+  pipeline::EnvironmentMaps maps;
+  pipeline::EnvironmentMapSettings settings;
+  settings.reflection_face_size = face_size;
+  settings.normal_iterations = iterations;
+  if (!frames.init(capabilities, error) || !maps.init(capabilities, settings, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  const std::string name = std::string("probe_to_cube/") + (eight_bit ? "8bit" : "half") +
+                           "/face:" + std::to_string(face_size) + "/iters:" + std::to_string(iterations);
+  bool failed = false;
+  const ErrorRow& row = errorsFor(name, [&] {
+    ErrorRow r;
+    ReflectionErrors sum;
+    double gpu_vs_cpu = NAN;
+    for (size_t f = 0; f < s.frames.size(); ++f) {
+      std::vector<float> validity;
+      std::optional<ibl::CubeMapRGB> map;
+      if (!maps.updateReflection(*frames.textures[f], s.frames[f].view, s.scene.rig.probe_reflectance, error) ||
+          !(map = maps.readReflection(error, &validity))) {
+        failed = true;
+        return r;
+      }
+      const ReflectionErrors e = compareReflection(*map, validity, radianceTruth(face_size), s.frames[f].to_camera_w);
+      sum.cone_main += e.cone_main;
+      sum.cone_narrow += e.cone_narrow;
+      sum.all_valid += e.all_valid;
+      sum.valid_fraction += e.valid_fraction;
+      if (f == 0) gpu_vs_cpu = compareWithCpu(*map, cpuReflection(face_size, iterations), s.frames[0].to_camera_w);
+    }
+    const double count = static_cast<double>(s.frames.size());
+    r.values = {{"err100_pct", 100.0 * sum.cone_main / count},
+                {"err60_pct", 100.0 * sum.cone_narrow / count},
+                {"err_valid_pct", 100.0 * sum.all_valid / count},
+                {"valid_pct", 100.0 * sum.valid_fraction / count},
+                {"gpu_vs_cpu_pct", 100.0 * gpu_vs_cpu}};
+    return r;
+  });
+  if (failed) {
+    errorTable().erase(name);
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  size_t next = 0;
+  for (auto _ : state) {
+    if (!maps.updateReflection(*frames.textures[next], s.frames[next].view, s.scene.rig.probe_reflectance, error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    glFinish();
+    next = (next + 1) % s.frames.size();
+  }
+  setCounters(state, row);
+}
+
+// ---------------------------------------------------------------------------
+// 3. diffuse_blur (GPU)
+
+void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int half_taps) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  const gles::Capabilities& capabilities = eight_bit ? s.capabilities_8bit : s.capabilities_full;
+  std::string error;
+  FrameTextures frames;
+  pipeline::EnvironmentMaps maps;
+  pipeline::EnvironmentMapSettings settings;  // reflection 64, 4 iterations
+  settings.intermediate_face_size = face_size;
+  settings.diffuse_face_size = face_size;
+  settings.blur_half_taps = half_taps;
+  if (!frames.init(capabilities, error) || !maps.init(capabilities, settings, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  const std::string name = std::string("diffuse_blur/") + (eight_bit ? "8bit" : "half") +
+                           "/face:" + std::to_string(face_size) + "/half_taps:" + std::to_string(half_taps);
+  bool failed = false;
+  const ErrorRow& row = errorsFor(name, [&] {
+    ErrorRow r;
+    double vs_truth = 0, vs_hdr = 0, vs_reflection = 0, probe_part = 0, worst = 0;
+    int count = 0;
+    for (size_t f = 0; f < s.frames.size(); ++f) {
+      std::optional<ibl::CubeMapRGB> reflection, diffuse;
+      if (!maps.updateReflection(*frames.textures[f], s.frames[f].view, s.scene.rig.probe_reflectance, error) ||
+          !maps.updateDiffuse(error) || !(reflection = maps.readReflection(error)) ||
+          !(diffuse = maps.readDiffuse(error))) {
+        failed = true;
+        return r;
+      }
+      for (int i = 0; i < 5; ++i) {
+        const double estimated = kPi * luminance(glm::dvec3(diffuse->sampleBilinear(kNormals[i])));
+        const double from_reflection = luminance(ibl::irradianceFromCubeMap(*reflection, kNormals[i]));
+        const double truth = s.irradiance_truth[i];
+        const double e = std::abs(estimated - truth) / truth;
+        vs_truth += e;
+        worst = std::max(worst, e);
+        vs_hdr += std::abs(estimated - s.irradiance_truth_hdr[i]) / s.irradiance_truth_hdr[i];
+        vs_reflection += std::abs(estimated - from_reflection) / from_reflection;
+        probe_part += std::abs(from_reflection - truth) / truth;
+        ++count;
+      }
+    }
+    r.values = {{"err_vs_truth_pct", 100.0 * vs_truth / count},
+                {"err_vs_truth_max_pct", 100.0 * worst},
+                {"err_vs_hdr_pct", 100.0 * vs_hdr / count},
+                {"blur_err_pct", 100.0 * vs_reflection / count},
+                {"probe_part_pct", 100.0 * probe_part / count}};
+    return r;
+  });
+  if (failed) {
+    errorTable().erase(name);
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  // The reflection map of frame 0 is the input of every timed pass.
+  if (!maps.updateReflection(*frames.textures[0], s.frames[0].view, s.scene.rig.probe_reflectance, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  glFinish();
+  for (auto _ : state) {
+    if (!maps.updateDiffuse(error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    glFinish();
+  }
+  setCounters(state, row);
+}
+
+// ---------------------------------------------------------------------------
+// 4. render + present readback, and the camera upload
+
+struct RenderRig {
+  FrameTextures frames;
+  pipeline::EnvironmentMaps maps;
+  pipeline::ObjectCompositor compositor;
+  gles::RenderTarget target;
+  bool init(std::string& error) {
+    Setup& s = setup();
+    return frames.init(s.capabilities_full, error) &&
+           maps.init(s.capabilities_full, pipeline::EnvironmentMapSettings{}, error) &&
+           compositor.init(s.capabilities_full, pipeline::ObjectCompositorSettings{}, maps.storage(), error) &&
+           target.init(s.scene.camera.width_px, s.scene.camera.height_px, error) &&
+           maps.updateReflection(*frames.textures[0], s.frames[0].view, s.scene.rig.probe_reflectance, error) &&
+           maps.updateDiffuse(error);
+  }
+  // The app's defaults (AppSettings::object): a 35 mm sphere resting on the tag.
+  bool draw(std::string& error) {
+    Setup& s = setup();
+    ibl::SurfaceMaterial material;
+    material.albedo = glm::vec3(0.8f);
+    material.k_specular = 0.25f;
+    material.shininess = 48.0f;
+    material.k_reflect = 0.08f;
+    ibl::SceneLighting lighting;
+    target.bind();
+    compositor.drawCameraBackground(*frames.textures[0]);
+    return compositor.drawSphereObject(s.scene.camera, s.frames[0].truth.pose, glm::dvec3(0.0, 0.0, 0.035), 0.035,
+                                       material, lighting, maps, error);
+  }
+};
+
+void renderFrame(benchmark::State& state) {
+  if (!requireGl(state)) return;
+  RenderRig rig;
+  std::string error;
+  if (!rig.init(error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  for (auto _ : state) {
+    if (!rig.draw(error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    glFinish();
+  }
+}
+
+void presentReadback(benchmark::State& state) {
+  if (!requireGl(state)) return;
+  RenderRig rig;
+  std::string error;
+  if (!rig.init(error) || !rig.draw(error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  glFinish();
+  ImageRGB8 image;
+  for (auto _ : state) {
+    if (!rig.target.readRGB(image, error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    benchmark::DoNotOptimize(image.pixels.data());
+  }
+}
+
+void uploadFrame(benchmark::State& state) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  pipeline::CameraFrameTexture texture;
+  std::string error;
+  if (!texture.init(s.capabilities_full, error) || !texture.upload(s.frames[0].rgb, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  size_t next = 0;
+  for (auto _ : state) {
+    if (!texture.upload(s.frames[next].rgb, error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    glFinish();
+    next = (next + 1) % s.frames.size();
+  }
+}
+
+// ---------------------------------------------------------------------------
+// 5. CPU references
+
+void cpuProbeToCube(benchmark::State& state, int face_size) {
+  Setup& s = setup();
+  ibl::ProbeToCubeParams params;
+  params.face_size = face_size;
+  params.probe_reflectance = s.scene.rig.probe_reflectance;
+  for (auto _ : state) {
+    ibl::CubeMapRGB map = ibl::probeImageToCubeMap(s.frames[0].view, s.frames[0].rgb, params);
+    benchmark::DoNotOptimize(map.faces[0].data());
+  }
+  const std::string name = "cpu/probe_to_cube/face:" + std::to_string(face_size);
+  const ErrorRow& row = errorsFor(name, [&] {
+    ErrorRow r;
+    const ibl::CubeMapRGB map = ibl::probeImageToCubeMap(s.frames[0].view, s.frames[0].rgb, params);
+    // The CPU reference has no validity output: texels it cannot see are 0.
+    std::vector<float> validity(static_cast<size_t>(ibl::kCubeFaceCount) * face_size * face_size, 1.0f);
+    const ReflectionErrors e = compareReflection(map, validity, radianceTruth(face_size), s.frames[0].to_camera_w);
+    r.values = {{"err100_pct", 100.0 * e.cone_main}, {"err60_pct", 100.0 * e.cone_narrow}};
+    return r;
+  });
+  setCounters(state, row);
+}
+
+void cpuBlurPass(benchmark::State& state, int input_face_size, int output_face_size, int half_taps) {
+  ibl::SphericalBlurPass pass;
+  pass.axis = ibl::BlurAxis::kEast;
+  pass.half_taps = half_taps;
+  const ibl::CubeMapRGB& input = cpuReflection(input_face_size, 4);
+  for (auto _ : state) {
+    ibl::CubeMapRGB output = ibl::sphericalBlurPass(input, output_face_size, pass);
+    benchmark::DoNotOptimize(output.faces[0].data());
+  }
+}
+
+// ---------------------------------------------------------------------------
+
+void printErrorTable() {
+  if (errorTable().empty()) return;
+  std::printf("\nError against the simulator's truth (per configuration; deterministic, so not repeated):\n");
+  for (const auto& [name, row] : errorTable()) {
+    std::printf("  %-40s", name.c_str());
+    for (const auto& [key, value] : row.values) std::printf("  %s=%.3f", key.c_str(), value);
+    std::printf("\n");
+  }
+  std::printf(
+      "  err100/err60: relative luminance error of the reflection map within 100/60 deg of the direction back to the\n"
+      "  camera (behind that the ball shows directions only in its rim, and straight behind it not at all);\n"
+      "  err_valid: over every texel the stage marked valid. Diffuse: mean over up and 4 horizontal normals of\n"
+      "  |pi*diffuse - E|/E with E the sim's clipped irradiance (err_vs_truth), irradianceFromCubeMap of the\n"
+      "  read-back reflection map (blur_err), and that reference against the truth (probe_part).\n");
+}
+
+void registerAll() {
+  using benchmark::kMillisecond;
+  constexpr double kMinTime = 0.2;
+
+  for (int decimate : {1, 2, 3})
+    for (int threads : {1, 2})
+      benchmark::RegisterBenchmark(
+          ("detect_pose/decimate:" + std::to_string(decimate) + "/threads:" + std::to_string(threads)).c_str(),
+          [=](benchmark::State& state) { detectPose(state, decimate, threads); })
+          ->Unit(kMillisecond)
+          ->UseRealTime()
+          ->MinTime(kMinTime);
+
+  benchmark::RegisterBenchmark("upload/640x480", uploadFrame)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
+
+  for (bool eight_bit : {false, true})
+    for (int face : {32, 64, 128})
+      for (int iterations : {1, 2, 4})
+        benchmark::RegisterBenchmark((std::string("probe_to_cube/") + (eight_bit ? "8bit" : "half") + "/face:" +
+                                      std::to_string(face) + "/iters:" + std::to_string(iterations))
+                                         .c_str(),
+                                     [=](benchmark::State& state) { probeToCube(state, eight_bit, face, iterations); })
+            ->Unit(kMillisecond)
+            ->UseRealTime()
+            ->MinTime(kMinTime);
+
+  for (int face : {8, 16, 32})
+    for (int taps : {4, 8, 16})
+      benchmark::RegisterBenchmark(("diffuse_blur/half/face:" + std::to_string(face) + "/half_taps:" +
+                                    std::to_string(taps))
+                                       .c_str(),
+                                   [=](benchmark::State& state) { diffuseBlur(state, false, face, taps); })
+          ->Unit(kMillisecond)
+          ->UseRealTime()
+          ->MinTime(kMinTime);
+  // The 8-bit path at the app's defaults.
+  benchmark::RegisterBenchmark("diffuse_blur/8bit/face:32/half_taps:8",
+                               [](benchmark::State& state) { diffuseBlur(state, true, 32, 8); })
+      ->Unit(kMillisecond)
+      ->UseRealTime()
+      ->MinTime(kMinTime);
+
+  benchmark::RegisterBenchmark("render/640x480", renderFrame)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("present_readback/640x480", presentReadback)
+      ->Unit(kMillisecond)
+      ->UseRealTime()
+      ->MinTime(kMinTime);
+
+  benchmark::RegisterBenchmark("cpu/probe_to_cube/face:64", [](benchmark::State& state) { cpuProbeToCube(state, 64); })
+      ->Unit(kMillisecond)
+      ->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("cpu/blur_pass/64to32/half_taps:8",
+                               [](benchmark::State& state) { cpuBlurPass(state, 64, 32, 8); })
+      ->Unit(kMillisecond)
+      ->MinTime(kMinTime);
+}
+
+}  // namespace
+}  // namespace probelight::bench
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  probelight::bench::registerAll();
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  std::fflush(stdout);
+  probelight::bench::printErrorTable();
+  return 0;
+}
