@@ -157,6 +157,33 @@ TEST_F(EndToEnd, SimulatedRunDrawsTheObjectWhereTheTagSays) {
   EXPECT_LE(max_outside, 1.0);
 }
 
+// The GLES2 fallback (no half-float render targets: 8-bit sRGB-encoded cube
+// maps) runs the whole kiosk and measures as well as the half-float path.
+TEST_F(EndToEnd, EightBitFallbackMatchesHalfFloatAgainstTruth) {
+  const fs::path config = dir_ / "force_8bit.yaml";
+  std::ofstream(config) << "environment_maps:\n  force_8bit: true\n";
+  double sky_error[2] = {0.0, 0.0};
+  for (int force_8bit = 0; force_8bit < 2; ++force_8bit) {
+    const fs::path out = dir_ / (force_8bit ? "out8" : "out16");
+    // 11 frames: the maps are compared with truth on frames 0 and 10.
+    const CommandResult result = run("run --frames 11 --save-every 0 --env overcast --out " + out.string() +
+                                     (force_8bit ? " --config " + config.string() : std::string()));
+    ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+    const nlohmann::json report = readReport(out);
+    const std::string storage = report["map_storage"];
+    EXPECT_EQ(storage.rfind(force_8bit ? "8-bit" : "half float", 0), 0u) << storage;
+    sky_error[force_8bit] = report["accuracy"]["reflection_map_sky_rel_error"].get<double>();
+  }
+  // An overcast sky is smooth, so what is left is 8-bit camera noise and
+  // quantisation (~1-2%): 5% catches a wrong transfer curve or a slipped
+  // lookup, which cost tens of percent.
+  EXPECT_LT(sky_error[0], 0.05);
+  EXPECT_LT(sky_error[1], 0.05);
+  // The 8-bit maps keep dark values through the sRGB encoding: they add at
+  // most a quantisation step's worth (~0.5%) to the error.
+  EXPECT_NEAR(sky_error[1], sky_error[0], 0.005);
+}
+
 TEST_F(EndToEnd, FramesWithoutATagStillShowAndSayWhy) {
   // An all-black, an all-white, and an empty (undecodable) file; a real
   // frame is not needed to check that nothing crashes and the status is set.
