@@ -98,8 +98,8 @@ run flags:
   --frames N                   frames to process, 0 = until the source ends (default 300)
   --save-every K               write every K-th composited frame as PNG, 0 = none (default 1)
   --out DIR                    output folder for frames and report.json (default out)
-  --env NAME|FILE              sim: environment (studio, sun_sky, overcast, coloured_wall, or an .exr/.hdr)
-  --path NAME                  sim: camera path
+  --env NAME|FILE              sim: studio, sun_sky, overcast, coloured_wall, uniform, or an .exr/.hdr file
+  --path NAME                  sim: camera path: static, orbit, slow_wobble, random
   --quiet                      no per-frame status lines
 
 exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration.

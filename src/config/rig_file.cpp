@@ -1,18 +1,23 @@
 #include "config/rig_file.hpp"
 
+#include "core/apriltag_families.hpp"
+
 #include <algorithm>
 #include <cmath>
 
 namespace probelight::config {
 
 const std::vector<TagFamilyInfo>& knownTagFamilies() {
-  // Code counts of libapriltag 3.3's generated families (checked against the
-  // library in tests/tracking).
-  static const std::vector<TagFamilyInfo> families = {
-      {"tag36h11", 587},         {"tag36h10", 2320},       {"tag25h9", 35},
-      {"tag16h5", 30},           {"tagCircle21h7", 38},    {"tagCircle49h12", 65535},
-      {"tagCustom48h12", 42211}, {"tagStandard41h12", 2115}, {"tagStandard52h13", 48714},
-  };
+  // The id range comes from the library itself, so it cannot drift from the
+  // detector's.
+  static const std::vector<TagFamilyInfo> families = [] {
+    std::vector<TagFamilyInfo> result;
+    for (const AprilTagFamilyFactory& factory : aprilTagFamilies()) {
+      const AprilTagFamilyHandle family = createAprilTagFamily(factory.name);
+      result.push_back({factory.name, static_cast<int>(family->ncodes)});
+    }
+    return result;
+  }();
   return families;
 }
 

@@ -1,4 +1,5 @@
 #include "gles/capabilities.hpp"
+#include "gles/extension_list.hpp"
 
 #include <cstring>
 
@@ -7,17 +8,6 @@
 namespace probelight::gles {
 
 namespace {
-
-bool hasExtension(const char* list, const char* name) {
-  if (list == nullptr) return false;
-  const size_t length = std::strlen(name);
-  for (const char* p = list; (p = std::strstr(p, name)) != nullptr; p += length) {
-    const bool starts = p == list || p[-1] == ' ';
-    const bool ends = p[length] == ' ' || p[length] == '\0';
-    if (starts && ends) return true;
-  }
-  return false;
-}
 
 std::string glString(GLenum name) {
   const auto* text = reinterpret_cast<const char*>(glGetString(name));

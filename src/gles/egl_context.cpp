@@ -1,4 +1,5 @@
 #include "gles/egl_context.hpp"
+#include "gles/extension_list.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -9,17 +10,6 @@
 namespace probelight::gles {
 
 namespace {
-
-bool hasExtension(const char* list, const char* name) {
-  if (list == nullptr) return false;
-  const size_t length = std::strlen(name);
-  for (const char* p = list; (p = std::strstr(p, name)) != nullptr; p += length) {
-    const bool starts = p == list || p[-1] == ' ';
-    const bool ends = p[length] == ' ' || p[length] == '\0';
-    if (starts && ends) return true;
-  }
-  return false;
-}
 
 // Initializes `display`, picks an RGBA8 ES2 config and makes a context
 // current, with a 1x1 pbuffer when `use_pbuffer`. Terminates the display on

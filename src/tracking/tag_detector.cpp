@@ -4,37 +4,10 @@
 #include <stdexcept>
 
 #include <apriltag/apriltag.h>
-#include <apriltag/tag16h5.h>
-#include <apriltag/tag25h9.h>
-#include <apriltag/tag36h10.h>
-#include <apriltag/tag36h11.h>
-#include <apriltag/tagCircle21h7.h>
-#include <apriltag/tagCircle49h12.h>
-#include <apriltag/tagCustom48h12.h>
-#include <apriltag/tagStandard41h12.h>
-#include <apriltag/tagStandard52h13.h>
 
 namespace probelight::tracking {
 
 namespace {
-
-struct FamilyFactory {
-  const char* name;
-  apriltag_family_t* (*create)();
-  void (*destroy)(apriltag_family_t*);
-};
-
-const FamilyFactory kFamilies[] = {
-    {"tag36h11", tag36h11_create, tag36h11_destroy},
-    {"tag36h10", tag36h10_create, tag36h10_destroy},
-    {"tag25h9", tag25h9_create, tag25h9_destroy},
-    {"tag16h5", tag16h5_create, tag16h5_destroy},
-    {"tagCircle21h7", tagCircle21h7_create, tagCircle21h7_destroy},
-    {"tagCircle49h12", tagCircle49h12_create, tagCircle49h12_destroy},
-    {"tagCustom48h12", tagCustom48h12_create, tagCustom48h12_destroy},
-    {"tagStandard41h12", tagStandard41h12_create, tagStandard41h12_destroy},
-    {"tagStandard52h13", tagStandard52h13_create, tagStandard52h13_destroy},
-};
 
 // Decoded images smaller than this (after decimation) crash libapriltag 3.3
 // (measured: 1-2 px crash, 2x2 decimated survives); no tag fits anyway.
@@ -48,12 +21,8 @@ struct DetectionsDeleter {
 
 std::vector<std::string> availableTagFamilies() {
   std::vector<std::string> names;
-  for (const FamilyFactory& factory : kFamilies) names.emplace_back(factory.name);
+  for (const AprilTagFamilyFactory& factory : aprilTagFamilies()) names.emplace_back(factory.name);
   return names;
-}
-
-void detail::FamilyDeleter::operator()(apriltag_family* family) const {
-  if (family && destroy) destroy(family);
 }
 
 void detail::DetectorDeleter::operator()(apriltag_detector* detector) const {
@@ -61,16 +30,14 @@ void detail::DetectorDeleter::operator()(apriltag_detector* detector) const {
 }
 
 TagDetector::TagDetector(const TagDetectorSettings& settings) : settings_(settings) {
-  const FamilyFactory* factory = nullptr;
-  for (const FamilyFactory& candidate : kFamilies)
-    if (settings.family == candidate.name) factory = &candidate;
-  if (!factory) throw std::invalid_argument("unknown AprilTag family '" + settings.family + "'");
+  if (!findAprilTagFamily(settings.family))
+    throw std::invalid_argument("unknown AprilTag family '" + settings.family + "'");
   if (!(settings.quad_decimate >= 1.0f)) throw std::invalid_argument("quad_decimate must be >= 1");
   if (settings.nthreads < 1) throw std::invalid_argument("nthreads must be >= 1");
   if (!(settings.quad_sigma >= 0.0f)) throw std::invalid_argument("quad_sigma must be >= 0");
   if (!(settings.decode_sharpening >= 0.0)) throw std::invalid_argument("decode_sharpening must be >= 0");
 
-  family_ = std::unique_ptr<apriltag_family, detail::FamilyDeleter>(factory->create(), detail::FamilyDeleter{factory->destroy});
+  family_ = createAprilTagFamily(settings.family);
   detector_.reset(apriltag_detector_create());
   if (!family_ || !detector_) throw std::runtime_error("libapriltag could not allocate its detector");
   // Two corrected bits is libapriltag's choice; its lookup table grows with the

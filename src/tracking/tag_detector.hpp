@@ -2,6 +2,8 @@
 // conventions (world-corner order, OpenCV pixel centres).
 #pragma once
 
+#include "core/apriltag_families.hpp"
+
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -60,10 +62,6 @@ struct TagDetection {
 };
 
 namespace detail {
-struct FamilyDeleter {
-  void (*destroy)(apriltag_family*) = nullptr;  // the family's own *_destroy
-  void operator()(apriltag_family* family) const;
-};
 struct DetectorDeleter {
   void operator()(apriltag_detector* detector) const;
 };
@@ -94,7 +92,7 @@ class TagDetector {
  private:
   TagDetectorSettings settings_;
   // Declared first so it is destroyed last: the detector borrows the family.
-  std::unique_ptr<apriltag_family, detail::FamilyDeleter> family_;
+  AprilTagFamilyHandle family_;
   std::unique_ptr<apriltag_detector, detail::DetectorDeleter> detector_;
 };
 

@@ -117,3 +117,22 @@ TEST_F(GpuTest, RenderTargetRejectsEmptySizeWithAReason) {
 
 }  // namespace
 }  // namespace probelight
+
+#include "gles/extension_list.hpp"
+
+namespace probelight::gles {
+namespace {
+
+// A name that is a prefix of another listed name is not present.
+TEST(ExtensionList, MatchesWholeNamesOnly) {
+  const char* list = "GL_OES_texture_half_float_linear GL_OES_depth_texture";
+  EXPECT_FALSE(hasExtension(list, "GL_OES_texture_half_float"));
+  EXPECT_TRUE(hasExtension(list, "GL_OES_texture_half_float_linear"));
+  EXPECT_TRUE(hasExtension(list, "GL_OES_depth_texture"));
+  EXPECT_FALSE(hasExtension(list, "GL_OES_depth"));
+  EXPECT_FALSE(hasExtension(nullptr, "GL_OES_depth_texture"));
+  EXPECT_TRUE(hasExtension("GL_OES_texture_half_float_linear GL_OES_texture_half_float", "GL_OES_texture_half_float"));
+}
+
+}  // namespace
+}  // namespace probelight::gles
