@@ -177,23 +177,69 @@ std::string formatVector(const glm::dvec3& v) {
   return out.str();
 }
 
-}  // namespace
+// One `probelight run`: owns every stage and seam, and walks each frame
+// through them. Each method is one phase of the run, so a later stage (lights,
+// shadows, HDR) has an obvious place to go.
+class Kiosk {
+ public:
+  Kiosk(const RunOptions& options, std::ostream& log) : options_(options), log_(log) {}
 
-int runKiosk(const RunOptions& options, std::ostream& log) {
-  LoadedInputs inputs;
-  try {
-    inputs = loadInputs(options);
-  } catch (const config::ConfigError& error) {
-    log << "probelight: " << error.what() << "\n";
-    return 2;
+  // The exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration.
+  int run() {
+    if (const int status = setUp(); status != 0) return status;
+    const auto loop_start = std::chrono::steady_clock::now();
+    const int status = frameLoop();
+    const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+    source_->stop();
+    if (status != 0) return status;
+    return writeReport(elapsed_s);
   }
-  AppSettings& settings = inputs.settings;
 
-  // Frame source.
-  std::unique_ptr<FrameSource> source;
-  std::shared_ptr<const sim::World> world;
-  const std::uint64_t frame_limit = static_cast<std::uint64_t>(options.frames);
-  if (options.source == "sim") {
+ private:
+  // Reads every file, then opens source, display, GPU stages, tracker and
+  // button, in that order, so that a bad file costs nothing but its message.
+  int setUp() {
+    try {
+      inputs_ = loadInputs(options_);
+    } catch (const config::ConfigError& error) {
+      return fail(2, error.what());
+    }
+    if (const int status = makeSource(); status != 0) return status;
+    if (const int status = openDisplayAndStages(); status != 0) return status;
+
+    const AppSettings& settings = inputs_.settings;
+    tracking::TagDetectorSettings detector_settings;
+    detector_settings.family = inputs_.rig.tag_family;
+    detector_settings.quad_decimate = static_cast<float>(settings.tracking.quad_decimate);
+    detector_settings.nthreads = settings.tracking.threads;
+    detector_settings.quad_sigma = static_cast<float>(settings.tracking.quad_sigma);
+    detector_settings.refine_edges = settings.tracking.refine_edges;
+    try {
+      tracker_ = std::make_unique<tracking::TagTracker>(detector_settings, inputs_.rig, inputs_.camera);
+    } catch (const std::invalid_argument& bad_setting) {
+      return fail(2, std::string("tracking: ") + bad_setting.what());
+    }
+
+    std::string error;
+    button_ = makeButtonSource(options_.button, options_.key_path, error);
+    if (!button_ || !button_->start(error)) return fail(2, error);
+    if (!source_->start(error)) return fail(options_.source == "images" ? 2 : 1, error);
+
+    material_.albedo = glm::vec3(settings.object.albedo);
+    material_.k_specular = static_cast<float>(settings.object.k_specular);
+    material_.shininess = static_cast<float>(settings.object.shininess);
+    material_.k_reflect = static_cast<float>(settings.object.k_reflect);
+    object_center_w_ = glm::dvec3(settings.object.position_w, settings.object.radius_m);
+    machine_ = LightingStateMachine(settings.recalibration);
+    return 0;
+  }
+
+  int makeSource() {
+    const AppSettings& settings = inputs_.settings;
+    if (options_.source != "sim") {
+      source_ = std::make_unique<ImageFrameSource>(options_.images);
+      return 0;
+    }
     sim::SceneConfig scene = sim::defaultScene();
     scene.environment = settings.sim.env;
     scene.camera_path.name = settings.sim.camera_path;
@@ -202,162 +248,118 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
     scene.lighting.sun_azimuth_rate_deg_per_frame = settings.sim.sun_azimuth_rate_deg_per_frame;
     scene.lighting.lamp_on_frame = settings.sim.lamp_on_frame;
     scene.lighting.lamp_off_frame = settings.sim.lamp_off_frame;
-    if (inputs.camera_from_file) scene.camera = inputs.camera;
-    if (inputs.rig_from_file) scene.rig = inputs.rig;
+    if (inputs_.camera_from_file) scene.camera = inputs_.camera;
+    if (inputs_.rig_from_file) scene.rig = inputs_.rig;
     try {
-      world = std::make_shared<const sim::World>(scene);
+      world_ = std::make_shared<const sim::World>(scene);
     } catch (const sim::SceneError& error) {
-      log << "probelight: " << error.what() << "\n";
-      return 2;
+      return fail(2, error.what());
     }
-    inputs.camera = scene.camera;
-    inputs.rig = scene.rig;
-    source = std::make_unique<SimFrameSource>(world, frame_limit);
-  } else {
-    source = std::make_unique<ImageFrameSource>(options.images);
-  }
-  const CameraIntrinsics& camera = inputs.camera;
-  const RigGeometry& rig = inputs.rig;
-
-  // Display and GL.
-  std::string error;
-  std::unique_ptr<Display> display = makeDisplay(options.display, options.out_dir, settings.save_every, error);
-  if (!display || !display->open(camera.width_px, camera.height_px, error)) {
-    log << "probelight: " << error << "\n";
-    return 1;
-  }
-  gles::Capabilities capabilities = gles::probeCapabilities();
-  if (settings.maps.force_8bit) capabilities = capabilities.withoutExtensions();
-  if (!options.quiet) log << "probelight: " << display->describe() << ": " << capabilities.summary() << "\n";
-
-  pipeline::CameraFrameTexture frame_texture;
-  pipeline::EnvironmentMaps maps;
-  pipeline::ObjectCompositor compositor;
-  pipeline::EnvironmentMapSettings map_settings;
-  map_settings.reflection_face_size = settings.maps.face_size;
-  map_settings.intermediate_face_size = settings.maps.diffuse_face_size;
-  map_settings.diffuse_face_size = settings.maps.diffuse_face_size;
-  map_settings.blur_sigma_rad = settings.maps.blur_sigma_rad;
-  map_settings.blur_half_taps = settings.maps.blur_half_taps;
-  map_settings.normal_iterations = settings.maps.normal_iterations;
-  if (!frame_texture.init(capabilities, error) || !maps.init(capabilities, map_settings, error) ||
-      !compositor.init(capabilities, pipeline::ObjectCompositorSettings{}, maps.storage(), error)) {
-    log << "probelight: GPU set-up failed: " << error << "\n";
-    return 1;
+    // The simulated camera and rig are what the pipeline is told: a perfect
+    // calibration, so that the errors measured are the pipeline's own.
+    inputs_.camera = scene.camera;
+    inputs_.rig = scene.rig;
+    source_ = std::make_unique<SimFrameSource>(world_, frameLimit());
+    return 0;
   }
 
-  tracking::TagDetectorSettings detector_settings;
-  detector_settings.family = rig.tag_family;
-  detector_settings.quad_decimate = static_cast<float>(settings.tracking.quad_decimate);
-  detector_settings.nthreads = settings.tracking.threads;
-  detector_settings.quad_sigma = static_cast<float>(settings.tracking.quad_sigma);
-  detector_settings.refine_edges = settings.tracking.refine_edges;
-  std::unique_ptr<tracking::TagTracker> tracker;
-  try {
-    tracker = std::make_unique<tracking::TagTracker>(detector_settings, rig, camera);
-  } catch (const std::invalid_argument& bad_setting) {
-    log << "probelight: tracking: " << bad_setting.what() << "\n";
-    return 2;
+  int openDisplayAndStages() {
+    const AppSettings& settings = inputs_.settings;
+    const CameraIntrinsics& camera = inputs_.camera;
+    std::string error;
+    display_ = makeDisplay(options_.display, options_.out_dir, settings.save_every, error);
+    if (!display_ || !display_->open(camera.width_px, camera.height_px, error)) return fail(1, error);
+    capabilities_ = gles::probeCapabilities();
+    if (settings.maps.force_8bit) capabilities_ = capabilities_.withoutExtensions();
+    if (!options_.quiet) log_ << "probelight: " << display_->describe() << ": " << capabilities_.summary() << "\n";
+
+    pipeline::EnvironmentMapSettings map_settings;
+    map_settings.reflection_face_size = settings.maps.face_size;
+    map_settings.intermediate_face_size = settings.maps.diffuse_face_size;
+    map_settings.diffuse_face_size = settings.maps.diffuse_face_size;
+    map_settings.blur_sigma_rad = settings.maps.blur_sigma_rad;
+    map_settings.blur_half_taps = settings.maps.blur_half_taps;
+    map_settings.normal_iterations = settings.maps.normal_iterations;
+    if (!frame_texture_.init(capabilities_, error) || !maps_.init(capabilities_, map_settings, error) ||
+        !compositor_.init(capabilities_, pipeline::ObjectCompositorSettings{}, maps_.storage(), error))
+      return fail(1, "GPU set-up failed: " + error);
+    return 0;
   }
 
-  std::unique_ptr<ButtonSource> button = makeButtonSource(options.button, options.key_path, error);
-  if (!button || !button->start(error)) {
-    log << "probelight: " << error << "\n";
-    return 2;
-  }
-  if (!source->start(error)) {
-    log << "probelight: " << error << "\n";
-    return options.source == "images" ? 2 : 1;
-  }
-
-  ibl::SurfaceMaterial material;
-  material.albedo = glm::vec3(settings.object.albedo);
-  material.k_specular = static_cast<float>(settings.object.k_specular);
-  material.shininess = static_cast<float>(settings.object.shininess);
-  material.k_reflect = static_cast<float>(settings.object.k_reflect);
-  ibl::SceneLighting lighting;  // no highlight until the first calibration
-  const glm::dvec3 object_center_w(settings.object.position_w, settings.object.radius_m);
-
-  LightingStateMachine machine(settings.recalibration);
-  RunReport report;
-  StatusOverlay overlay;
-  std::vector<std::uint8_t> luma;
-  bool have_maps = false;
-  std::uint64_t frames_done = 0;
-  int consecutive_timeouts = 0;
-  std::string last_logged_status;
-  const auto loop_start = std::chrono::steady_clock::now();
-  auto gpuDone = [&] {
-    if (settings.gpu_finish) glFinish();
-  };
-
-  while (frame_limit == 0 || frames_done < frame_limit) {
-    for (const ButtonEvent& event : button->poll()) {
-      if (event.kind == ButtonEvent::Kind::kPress) {
-        const bool was_running = machine.state() == AppState::kRunning;
-        machine.onButtonPress();
-        report.count(was_running ? "button_presses_accepted" : "button_presses_ignored");
-        if (!options.quiet)
-          log << "probelight: button: " << (was_running ? "recalibrating lights" : "already recalibrating, ignored")
-              << "\n";
-      } else {
-        report.count("button_long_presses_ignored");
+  int frameLoop() {
+    int consecutive_timeouts = 0;
+    while (frameLimit() == 0 || frames_done_ < frameLimit()) {
+      pollButton();
+      FrameLease lease;
+      const FrameWait wait = source_->waitFrame(std::chrono::milliseconds(2000), lease);
+      if (wait == FrameWait::kTimeout) {
+        // A camera that stops delivering: keep the last picture, say so, and
+        // give up only after a long silence.
+        log_ << "probelight: no frame from " << source_->name() << " for 2 s\n";
+        if (++consecutive_timeouts >= 15) {
+          log_ << "probelight: giving up: " << source_->name() << " delivered nothing for 30 s\n";
+          return 0;
+        }
+        continue;
       }
-    }
-
-    FrameLease lease;
-    const FrameWait wait = source->waitFrame(std::chrono::milliseconds(2000), lease);
-    if (wait == FrameWait::kTimeout) {
-      // A camera that stops delivering: keep the last picture, say so, and give
-      // up only after a long silence.
-      log << "probelight: no frame from " << source->name() << " for 2 s\n";
-      if (++consecutive_timeouts >= 15) {
-        log << "probelight: giving up: " << source->name() << " delivered nothing for 30 s\n";
-        break;
+      if (wait == FrameWait::kEndOfStream) return 0;
+      if (wait == FrameWait::kError) {
+        log_ << "probelight: " << source_->name() << ": " << source_->lastError() << "\n";
+        return 0;
       }
-      continue;
+      consecutive_timeouts = 0;
+      if (const int status = processFrame(*lease, frames_done_++); status != 0) return status;
     }
-    if (wait == FrameWait::kEndOfStream) break;
-    if (wait == FrameWait::kError) {
-      log << "probelight: " << source->name() << ": " << source->lastError() << "\n";
-      break;
-    }
-    consecutive_timeouts = 0;
-    const FrameBuffer& frame = *lease;
-    const std::uint64_t frame_number = frames_done++;
+    return 0;
+  }
 
+  void pollButton() {
+    for (const ButtonEvent& event : button_->poll()) {
+      if (event.kind != ButtonEvent::Kind::kPress) {
+        report_.count("button_long_presses_ignored");
+        continue;
+      }
+      const bool was_running = machine_.state() == AppState::kRunning;
+      machine_.onButtonPress();
+      report_.count(was_running ? "button_presses_accepted" : "button_presses_ignored");
+      if (!options_.quiet)
+        log_ << "probelight: button: " << (was_running ? "recalibrating lights" : "already recalibrating, ignored")
+             << "\n";
+    }
+  }
+
+  int processFrame(const FrameBuffer& frame, std::uint64_t frame_number) {
+    const CameraIntrinsics& camera = inputs_.camera;
+    const RigGeometry& rig = inputs_.rig;
     if (frame.rgb.width != camera.width_px || frame.rgb.height != camera.height_px) {
       // The calibration belongs to another resolution: using it would put the
       // object and the ball in the wrong place. Skip the frame, keep the state.
-      report.count("frames_wrong_size");
-      log << "probelight: " << frame.metadata.origin << ": frame is " << frame.rgb.width << "x" << frame.rgb.height
-          << " but the camera calibration is " << camera.width_px << "x" << camera.height_px << "; frame skipped\n";
-      continue;
+      report_.count("frames_wrong_size");
+      log_ << "probelight: " << frame.metadata.origin << ": frame is " << frame.rgb.width << "x" << frame.rgb.height
+           << " but the camera calibration is " << camera.width_px << "x" << camera.height_px << "; frame skipped\n";
+      return 0;
     }
-
+    std::string error;
     {
-      StageTimer timer(report, "upload");
-      if (!frame_texture.upload(frame.rgb, error)) {
-        log << "probelight: " << frame.metadata.origin << ": " << error << "\n";
-        return 1;
-      }
+      StageTimer timer(report_, "upload");
+      if (!frame_texture_.upload(frame.rgb, error)) return fail(1, frame.metadata.origin + ": " + error);
       gpuDone();
     }
 
     tracking::TagTrackResult track;
     {
-      StageTimer timer(report, "detect_pose");
-      tracking::rgbToLuma(frame.rgb, luma);
-      track = tracker->track(luma.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
+      StageTimer timer(report_, "detect_pose");
+      tracking::rgbToLuma(frame.rgb, luma_);
+      track = tracker_->track(luma_.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
     }
 
-    std::string status;
-    bool maps_updated = false;
-    ibl::MirrorBallView view{camera, track.pose, rig.probe_center_w, rig.probe_radius_m};
+    // Stages 2-3: the maps, only from a frame that shows the whole ball.
+    const ibl::MirrorBallView view{camera, track.pose, rig.probe_center_w, rig.probe_radius_m};
     ibl::ProbeOutline outline;
+    std::string status;
     std::string skip_reason;
     if (!track.found) {
-      report.count("frames_without_tag");
+      report_.count("frames_without_tag");
       skip_reason = "no tag";
       status = "No tag in view: " + track.status;
     } else {
@@ -370,124 +372,165 @@ int runKiosk(const RunOptions& options, std::ostream& log) {
         status = "Mirror ball too small in the image: lighting kept";
       }
     }
-    if (skip_reason.empty()) {
-      {
-        StageTimer timer(report, "probe_to_cube");
-        if (!maps.updateReflection(frame_texture, view, rig.probe_reflectance, error)) {
-          log << "probelight: " << error << "\n";
-          return 1;
-        }
-        gpuDone();
-      }
-      {
-        StageTimer timer(report, "diffuse_blur");
-        if (!maps.updateDiffuse(error)) {
-          log << "probelight: " << error << "\n";
-          return 1;
-        }
-        gpuDone();
-      }
-      maps_updated = true;
-      have_maps = true;
+    const bool maps_updated = skip_reason.empty();
+    if (maps_updated) {
+      if (const int failed = updateMaps(view, rig.probe_reflectance); failed != 0) return failed;
     } else {
-      report.recordStageSkip("probe_to_cube", skip_reason);
-      report.recordStageSkip("diffuse_blur", skip_reason);
+      report_.recordStageSkip("probe_to_cube", skip_reason);
+      report_.recordStageSkip("diffuse_blur", skip_reason);
     }
 
-    switch (machine.onFrame(maps_updated)) {
-      case FrameOutcome::kFitLights: {
-        const std::optional<ibl::CubeMapRGB> diffuse = maps.readDiffuse(error);
-        if (!diffuse) {
-          log << "probelight: " << error << "\n";
-          return 1;
-        }
-        const ibl::DominantLight light = ibl::findDominantLight(*diffuse);
-        lighting.highlight_direction_w = glm::vec3(light.direction_w);
-        lighting.highlight_rgb = glm::vec3(light.rgb);
-        report.count("calibrations_completed");
-        report.extra["lights"]["dominant_light"] = {
-            {"direction", {light.direction_w.x, light.direction_w.y, light.direction_w.z}},
-            {"rgb", {light.rgb.r, light.rgb.g, light.rgb.b}},
-            {"frame", frame_number}};
-        if (!options.quiet)
-          log << "probelight: frame " << frame_number << ": lights recalibrated, dominant light toward "
-              << formatVector(light.direction_w) << " rgb " << formatVector(light.rgb) << "\n";
+    switch (machine_.onFrame(maps_updated)) {
+      case FrameOutcome::kFitLights:
+        if (const int failed = fitLights(frame_number); failed != 0) return failed;
         break;
-      }
       case FrameOutcome::kCalibrationFailed:
-        report.count("calibrations_failed");
-        log << "probelight: frame " << frame_number << ": recalibration gave up (ball not seen in "
-            << machine.policy().max_frames << " frames); previous lighting kept\n";
+        report_.count("calibrations_failed");
+        log_ << "probelight: frame " << frame_number << ": recalibration gave up (ball not seen in "
+             << machine_.policy().max_frames << " frames); previous lighting kept\n";
         break;
       case FrameOutcome::kNothing:
         break;
     }
-    if (machine.state() == AppState::kRecalibrating) {
-      status = "Recalibrating lights (" + std::to_string(machine.goodFramesSoFar()) + "/" +
-               std::to_string(machine.policy().good_frames_needed) + ")" + (status.empty() ? "" : ": " + status);
-      report.count("frames_recalibrating");
+    if (machine_.state() == AppState::kRecalibrating) {
+      status = "Recalibrating lights (" + std::to_string(machine_.goodFramesSoFar()) + "/" +
+               std::to_string(machine_.policy().good_frames_needed) + ")" + (status.empty() ? "" : ": " + status);
+      report_.count("frames_recalibrating");
     }
 
+    if (const int failed = renderAndPresent(track, status, frame_number); failed != 0) return failed;
+
+    if (frame.metadata.truth) {
+      measureAgainstTruth(*frame.metadata.truth, track, track.found ? &outline : nullptr, report_);
+      if (world_ && maps_updated && frame_number % kTruthCheckEveryFrames == 0)
+        measureMapsAgainstTruth(*world_, frame.metadata.sequence, view, maps_, report_);
+    }
+    return 0;
+  }
+
+  int updateMaps(const ibl::MirrorBallView& view, double probe_reflectance) {
+    std::string error;
     {
-      StageTimer timer(report, "render");
-      display->beginFrame();
-      compositor.drawCameraBackground(frame_texture);
-      bool drawn = true;
-      if (track.found && have_maps)
-        drawn = compositor.drawSphereObject(camera, track.pose, object_center_w, settings.object.radius_m, material,
-                                            lighting, maps, error);
-      if (drawn && !status.empty()) {
-        const auto& rgba = overlay.render(status, camera.width_px, camera.height_px);
-        drawn = compositor.drawOverlayRGBA(rgba.data(), camera.width_px, camera.height_px, error);
-      }
-      if (!drawn) {
-        log << "probelight: " << error << "\n";
-        return 1;
+      StageTimer timer(report_, "probe_to_cube");
+      if (!maps_.updateReflection(frame_texture_, view, probe_reflectance, error)) return fail(1, error);
+      gpuDone();
+    }
+    {
+      StageTimer timer(report_, "diffuse_blur");
+      if (!maps_.updateDiffuse(error)) return fail(1, error);
+      gpuDone();
+    }
+    have_maps_ = true;
+    return 0;
+  }
+
+  // A recalibration has seen enough good frames: fit the lights from the
+  // current diffuse map.
+  int fitLights(std::uint64_t frame_number) {
+    std::string error;
+    const std::optional<ibl::CubeMapRGB> diffuse = maps_.readDiffuse(error);
+    if (!diffuse) return fail(1, error);
+    const ibl::DominantLight light = ibl::findDominantLight(*diffuse);
+    lighting_.highlight_direction_w = glm::vec3(light.direction_w);
+    lighting_.highlight_rgb = glm::vec3(light.rgb);
+    report_.count("calibrations_completed");
+    report_.extra["lights"]["dominant_light"] = {
+        {"direction", {light.direction_w.x, light.direction_w.y, light.direction_w.z}},
+        {"rgb", {light.rgb.r, light.rgb.g, light.rgb.b}},
+        {"frame", frame_number}};
+    if (!options_.quiet)
+      log_ << "probelight: frame " << frame_number << ": lights recalibrated, dominant light toward "
+           << formatVector(light.direction_w) << " rgb " << formatVector(light.rgb) << "\n";
+    return 0;
+  }
+
+  int renderAndPresent(const tracking::TagTrackResult& track, const std::string& status, std::uint64_t frame_number) {
+    const CameraIntrinsics& camera = inputs_.camera;
+    std::string error;
+    {
+      StageTimer timer(report_, "render");
+      display_->beginFrame();
+      compositor_.drawCameraBackground(frame_texture_);
+      // Before the first maps exist the object would be black: leave it out.
+      if (track.found && have_maps_ &&
+          !compositor_.drawSphereObject(camera, track.pose, object_center_w_, inputs_.settings.object.radius_m,
+                                        material_, lighting_, maps_, error))
+        return fail(1, error);
+      if (!status.empty()) {
+        const auto& rgba = overlay_.render(status, camera.width_px, camera.height_px);
+        if (!compositor_.drawOverlayRGBA(rgba.data(), camera.width_px, camera.height_px, error)) return fail(1, error);
       }
       gpuDone();
     }
-    if (!status.empty()) report.count("frames_with_status");
-    if (status != last_logged_status && !options.quiet) {
-      log << "probelight: frame " << frame_number << ": " << (status.empty() ? "tracking" : status) << "\n";
-      last_logged_status = status;
+    if (!status.empty()) report_.count("frames_with_status");
+    if (status != last_logged_status_ && !options_.quiet) {
+      log_ << "probelight: frame " << frame_number << ": " << (status.empty() ? "tracking" : status) << "\n";
+      last_logged_status_ = status;
     }
-
     {
-      StageTimer timer(report, "present");
-      if (frame_limit != 0 && frames_done == frame_limit)
-        if (auto* headless = dynamic_cast<HeadlessDisplay*>(display.get())) headless->keepNextFrame();
-      if (!display->present(frame_number, error)) {
-        log << "probelight: " << error << "\n";
-        return 1;
-      }
+      StageTimer timer(report_, "present");
+      if (frameLimit() != 0 && frames_done_ == frameLimit())
+        if (auto* headless = dynamic_cast<HeadlessDisplay*>(display_.get())) headless->keepNextFrame();
+      if (!display_->present(frame_number, error)) return fail(1, error);
     }
-
-    if (frame.metadata.truth) {
-      measureAgainstTruth(*frame.metadata.truth, track, track.found ? &outline : nullptr, report);
-      if (world && maps_updated && frame_number % kTruthCheckEveryFrames == 0)
-        measureMapsAgainstTruth(*world, frame.metadata.sequence, view, maps, report);
-    }
+    return 0;
   }
-  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
-  source->stop();
 
-  report.extra["source"] = source->name();
-  report.extra["display"] = display->describe();
-  report.extra["gl"] = capabilities.summary();
-  report.extra["state_at_end"] = toString(machine.state());
-  report.extra["map_storage"] = maps.storageDescription();
-  const nlohmann::json json = report.toJson(static_cast<long long>(frames_done), elapsed_s);
-  const std::filesystem::path report_path = std::filesystem::path(options.out_dir) / "report.json";
-  std::ofstream out(report_path);
-  out << json.dump(2) << "\n";
-  if (!out) {
-    log << "probelight: cannot write " << report_path.string() << "\n";
-    return 1;
+  int writeReport(double elapsed_s) {
+    report_.extra["source"] = source_->name();
+    report_.extra["display"] = display_->describe();
+    report_.extra["gl"] = capabilities_.summary();
+    report_.extra["state_at_end"] = toString(machine_.state());
+    report_.extra["map_storage"] = maps_.storageDescription();
+    const nlohmann::json json = report_.toJson(static_cast<long long>(frames_done_), elapsed_s);
+    const std::filesystem::path report_path = std::filesystem::path(options_.out_dir) / "report.json";
+    std::ofstream out(report_path);
+    out << json.dump(2) << "\n";
+    if (!out) return fail(1, "cannot write " + report_path.string());
+    if (!options_.quiet)
+      log_ << "probelight: " << frames_done_ << " frames in " << std::fixed << std::setprecision(1) << elapsed_s
+           << " s; report: " << report_path.string() << "\n";
+    return 0;
   }
-  if (!options.quiet)
-    log << "probelight: " << frames_done << " frames in " << std::fixed << std::setprecision(1) << elapsed_s
-        << " s; report: " << report_path.string() << "\n";
-  return 0;
-}
+
+  // glFinish after a GPU stage, so that its timer measures the GPU's work.
+  void gpuDone() const {
+    if (inputs_.settings.gpu_finish) glFinish();
+  }
+  std::uint64_t frameLimit() const { return static_cast<std::uint64_t>(options_.frames); }
+  int fail(int status, const std::string& message) {
+    log_ << "probelight: " << message << "\n";
+    return status;
+  }
+
+  const RunOptions& options_;
+  std::ostream& log_;
+  LoadedInputs inputs_;
+
+  std::shared_ptr<const sim::World> world_;  // only with --source sim: the truth
+  std::unique_ptr<FrameSource> source_;
+  std::unique_ptr<Display> display_;  // owns the GL context: declared before the GL objects below
+  gles::Capabilities capabilities_;
+  pipeline::CameraFrameTexture frame_texture_;
+  pipeline::EnvironmentMaps maps_;
+  pipeline::ObjectCompositor compositor_;
+  std::unique_ptr<tracking::TagTracker> tracker_;
+  std::unique_ptr<ButtonSource> button_;
+
+  ibl::SurfaceMaterial material_;
+  ibl::SceneLighting lighting_;  // no highlight until the first calibration
+  glm::dvec3 object_center_w_{0.0};
+  LightingStateMachine machine_;
+  RunReport report_;
+  StatusOverlay overlay_;
+  std::vector<std::uint8_t> luma_;
+  bool have_maps_ = false;
+  std::uint64_t frames_done_ = 0;
+  std::string last_logged_status_;
+};
+
+}  // namespace
+
+int runKiosk(const RunOptions& options, std::ostream& log) { return Kiosk(options, log).run(); }
 
 }  // namespace probelight
