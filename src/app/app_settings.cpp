@@ -12,13 +12,22 @@ AppSettings loadAppSettings(const std::string& path) {
   ConfigReader file(path);
 
   ConfigReader maps = file.section("environment_maps");
-  settings.maps.face_size = maps.readInt("face_size", settings.maps.face_size, Range::closed(8, 1024));
-  settings.maps.diffuse_face_size =
-      maps.readInt("diffuse_face_size", settings.maps.diffuse_face_size, Range::closed(4, 256));
-  settings.maps.blur_sigma_rad = maps.readDouble("blur_sigma_rad", settings.maps.blur_sigma_rad, Range::closed(0.01, 1.5));
-  settings.maps.blur_half_taps = maps.readInt("blur_half_taps", settings.maps.blur_half_taps, Range::closed(1, 32));
-  settings.maps.normal_iterations =
-      maps.readInt("normal_iterations", settings.maps.normal_iterations, Range::closed(1, 16));
+  pipeline::EnvironmentMapSettings& stages = settings.maps.stages;
+  stages.reflection_face_size = maps.readInt("face_size", stages.reflection_face_size, Range::closed(8, 1024));
+  stages.prefilter_face_size =
+      maps.readInt("prefilter_face_size", stages.prefilter_face_size, Range::closed(1, 1024));
+  const int factor = stages.reflection_face_size / stages.prefilter_face_size;
+  if (stages.reflection_face_size % stages.prefilter_face_size != 0 || factor > 8)
+    maps.fail("prefilter_face_size", "must divide face_size (" + std::to_string(stages.reflection_face_size) +
+                                         ") by a factor of 1 to 8");
+  stages.intermediate_face_size =
+      maps.readInt("intermediate_face_size", stages.intermediate_face_size, Range::closed(4, 256));
+  stages.diffuse_face_size = maps.readInt("diffuse_face_size", stages.diffuse_face_size, Range::closed(4, 256));
+  stages.blur_half_taps = maps.readInt("half_taps", stages.blur_half_taps, Range::closed(1, 32));
+  stages.pole_direct_deg = maps.readDouble("pole_direct_deg", stages.pole_direct_deg, Range::closed(0.0, 90.0));
+  stages.normal_iterations = maps.readInt("normal_iterations", stages.normal_iterations, Range::closed(1, 16));
+  const std::string method = maps.readString("diffuse_method", "cosine", {"cosine", "sh9"});
+  settings.maps.diffuse_method = method == "sh9" ? DiffuseMethod::kSH9 : DiffuseMethod::kCosinePasses;
   settings.maps.force_8bit = maps.readBool("force_8bit", settings.maps.force_8bit);
   maps.rejectUnknownFields();
 
@@ -50,6 +59,24 @@ AppSettings loadAppSettings(const std::string& path) {
   if (settings.recalibration.max_frames < settings.recalibration.good_frames_needed)
     recalibration.fail("max_frames", "must be at least good_frames");
   recalibration.rejectUnknownFields();
+
+  ConfigReader updates = file.section("map_updates");
+  MapUpdateSettings& policy = settings.map_updates;
+  policy.min_probe_radius_px =
+      updates.readDouble("min_probe_radius_px", policy.min_probe_radius_px, Range::closed(1.0, 10000.0));
+  policy.max_center_shift_px =
+      updates.readDouble("max_center_shift_px", policy.max_center_shift_px, Range::closed(0.0, 10000.0));
+  policy.max_radius_change_px =
+      updates.readDouble("max_radius_change_px", policy.max_radius_change_px, Range::closed(0.0, 10000.0));
+  policy.max_rotation_change_deg =
+      updates.readDouble("max_rotation_change_deg", policy.max_rotation_change_deg, Range::closed(0.0, 180.0));
+  policy.change_threshold_code =
+      updates.readDouble("change_threshold_code", policy.change_threshold_code, Range::closed(0.0, 255.0));
+  policy.max_age_frames = updates.readInt("max_age_frames", policy.max_age_frames, Range::atLeast(1));
+  // 0 would never let a change in: the map would stay the first one forever.
+  policy.smoothing_new_weight =
+      updates.readDouble("smoothing_new_weight", policy.smoothing_new_weight, Range::openClosed(0.0, 1.0));
+  updates.rejectUnknownFields();
 
   ConfigReader sim = file.section("sim");
   settings.sim.env = sim.readString("env", settings.sim.env);

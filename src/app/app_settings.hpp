@@ -7,16 +7,21 @@
 #include <glm/glm.hpp>
 
 #include "app/lighting_state_machine.hpp"
+#include "app/map_update_policy.hpp"
+#include "pipeline/environment_maps.hpp"
 
 namespace probelight {
 
+enum class DiffuseMethod {
+  kCosinePasses,  // two separable cosine passes on the GPU (ibl::irradianceOverPiByCosinePasses)
+  kSH9,           // Ramamoorthi & Hanrahan's 9 coefficients, projected on the CPU
+};
+
 struct EnvironmentMapConfig {
-  int face_size = 64;           // reflection cube map, texels per face edge
-  int diffuse_face_size = 32;   // blur passes and the diffuse map
-  double blur_sigma_rad = 0.6;  // a cosine lobe is close to a Gaussian of ~0.6 rad (SEEDS.md)
-  int blur_half_taps = 8;
-  int normal_iterations = 4;    // fixed-point steps for the ball normal (contraction ~ radius/distance)
-  bool force_8bit = false;      // ignore float render-target extensions (tests the GLES2 fallback)
+  // Sizes, taps and iterations, with the pipeline's own defaults.
+  pipeline::EnvironmentMapSettings stages;
+  DiffuseMethod diffuse_method = DiffuseMethod::kCosinePasses;
+  bool force_8bit = false;  // ignore float render-target extensions (tests the GLES2 fallback)
 };
 
 struct TrackingConfig {
@@ -52,6 +57,7 @@ struct AppSettings {
   TrackingConfig tracking;
   ObjectConfig object;
   RecalibrationPolicy recalibration;
+  MapUpdateSettings map_updates;  // when the maps are rebuilt (map_update_policy.hpp)
   SimConfig sim;
   int save_every = 1;     // write every K-th composited frame; 0 = none
   bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)

@@ -79,11 +79,48 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
   return options;
 }
 
+AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
+  AnalyzeOptions options;
+  const std::map<std::string, std::string*> valued = {
+      {"--frame", &options.frame_path}, {"--camera", &options.camera_path}, {"--rig", &options.rig_path},
+      {"--out", &options.out_dir},      {"--config", &options.config_path},
+  };
+  for (size_t i = 0; i < args.size(); ++i) {
+    std::string flag = args[i];
+    std::optional<std::string> inline_value;
+    if (auto eq = flag.find('='); flag.rfind("--", 0) == 0 && eq != std::string::npos) {
+      inline_value = flag.substr(eq + 1);
+      flag = flag.substr(0, eq);
+    }
+    auto it = valued.find(flag);
+    if (it == valued.end()) throw UsageError("analyze: unknown flag '" + flag + "' (see probelight --help)");
+    std::string value;
+    if (inline_value) {
+      value = *inline_value;
+    } else {
+      if (i + 1 >= args.size()) throw UsageError("flag " + flag + " needs a value");
+      value = args[++i];
+    }
+    if (value.empty()) throw UsageError("flag " + flag + " needs a value");
+    *it->second = value;
+  }
+  // No defaults for these: analysing a frame with some other camera's
+  // calibration, or writing over someone's folder, gives plausible nonsense.
+  if (options.frame_path.empty()) throw UsageError("analyze needs --frame FILE (the camera frame to analyse)");
+  if (options.camera_path.empty()) throw UsageError("analyze needs --camera camera.yaml (the calibration of the camera that took it)");
+  if (options.rig_path.empty()) throw UsageError("analyze needs --rig rig.yaml");
+  if (options.out_dir.empty()) throw UsageError("analyze needs --out DIR (where analysis.json and the pictures go)");
+  return options;
+}
+
 std::string usageText() {
   return R"(probelight: image-based lighting for an AR kiosk (mirror ball + AprilTag)
 
 usage:
   probelight run [flags]       run the kiosk: frames in, composited frames out
+  probelight analyze --frame F --camera camera.yaml --rig rig.yaml --out DIR [--config probelight.yaml]
+                               one frame in: DIR/analysis.json (tag, pose, ball, irradiance, timings)
+                               and pictures (overlay.png, ball.png, reflection_cross.png, diffuse_cross.png)
   probelight --help | --version
 
 run flags:
@@ -102,7 +139,8 @@ run flags:
   --path NAME                  sim: camera path: static, orbit, slow_wobble, random
   --quiet                      no per-frame status lines
 
-exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration.
+exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration,
+             3 (analyze) the tag or the ball was not found: analysis.json says why.
 )";
 }
 

@@ -35,6 +35,19 @@ struct RunOptions {
 // Parses the flags after `probelight run`. Throws UsageError.
 RunOptions parseRunOptions(const std::vector<std::string>& args);
 
+// Flags of `probelight analyze`: one frame in, what the system sees out.
+// All but config_path are required.
+struct AnalyzeOptions {
+  std::string frame_path;   // the camera frame (PNG, JPEG, ...)
+  std::string camera_path;  // camera.yaml of the camera that took it
+  std::string rig_path;     // rig.yaml
+  std::string out_dir;      // analysis.json and the pictures go here
+  std::string config_path;  // probelight.yaml (optional)
+};
+
+// Parses the flags after `probelight analyze`. Throws UsageError.
+AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args);
+
 std::string usageText();
 
 }  // namespace probelight

@@ -14,7 +14,9 @@
 
 #include "app/app_settings.hpp"
 #include "app/lighting_state_machine.hpp"
+#include "app/map_update_policy.hpp"
 #include "app/run_report.hpp"
+#include "app/stage_settings.hpp"
 #include "capture/image_frame_source.hpp"
 #include "capture/sim_frame_source.hpp"
 #include "config/camera_file.hpp"
@@ -26,6 +28,7 @@
 #include "ibl/dominant_light.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
+#include "ibl/spherical_harmonics.hpp"
 #include "input/button_source.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
@@ -39,9 +42,6 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-// Smallest ball image worth a map: below this the 64^2 faces would mostly
-// magnify a handful of pixels. Issue 3 makes this configurable.
-constexpr double kMinProbeRadiusPx = 8.0;
 // How often the run compares the GPU maps with the simulator's truth; the
 // read-back is not part of the product's frame cost.
 constexpr std::uint64_t kTruthCheckEveryFrames = 10;
@@ -50,6 +50,15 @@ double rotationErrorDeg(const glm::dmat3& estimated, const glm::dmat3& truth) {
   const glm::dmat3 difference = estimated * glm::transpose(truth);
   const double cosine = (difference[0][0] + difference[1][1] + difference[2][2] - 1.0) * 0.5;
   return std::acos(std::clamp(cosine, -1.0, 1.0)) * kRadToDeg;
+}
+
+// JSON has no NaN: a missing figure is null.
+nlohmann::json finiteOrNull(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
+
+void recordSeries(nlohmann::json& out, const std::string& name, const SampleSeries& series) {
+  if (series.empty()) return;
+  out[name] = {{"median", series.median()}, {"p95", series.percentile(95.0)}, {"max", series.max()},
+               {"samples", series.count()}};
 }
 
 double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
@@ -125,8 +134,10 @@ void measureAgainstTruth(const FrameTruth& truth, const tracking::TagTrackResult
 }
 
 // Compares the GPU's maps with the simulator's radiance and irradiance.
-void measureMapsAgainstTruth(const sim::World& world, std::uint64_t frame_index, const ibl::MirrorBallView& view,
-                             const pipeline::EnvironmentMaps& maps, RunReport& report) {
+// `view`: the one the maps were made from. Returns the mean relative error of
+// the diffuse map against the 8-bit-visible irradiance (NaN when not read).
+double measureMapsAgainstTruth(const sim::World& world, std::uint64_t frame_index, const ibl::MirrorBallView& view,
+                               const pipeline::EnvironmentMaps& maps, RunReport& report) {
   // Reflection map, over the directions the ball shows well: within 100
   // degrees of the direction back toward the camera (beyond that the view is
   // squeezed into the rim, and behind it is the blind spot). Only the sky
@@ -136,7 +147,7 @@ void measureMapsAgainstTruth(const sim::World& world, std::uint64_t frame_index,
   std::string error;
   const std::optional<ibl::CubeMapRGB> reflection_read = maps.readReflection(error);
   const std::optional<ibl::CubeMapRGB> diffuse_read = maps.readDiffuse(error);
-  if (!reflection_read || !diffuse_read) return;
+  if (!reflection_read || !diffuse_read) return std::nan("");
   const ibl::CubeMapRGB& reflection = *reflection_read;
   const glm::dvec3 to_camera = glm::normalize(view.pose.cameraCenterWorld() - view.center_w);
   const double rim_cosine = std::cos(100.0 / kRadToDeg);
@@ -159,16 +170,22 @@ void measureMapsAgainstTruth(const sim::World& world, std::uint64_t frame_index,
   // times it. Compared on the up normal and the four horizontal ones.
   const ibl::CubeMapRGB& diffuse = *diffuse_read;
   const glm::dvec3 normals[] = {{0, 0, 1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+  double clipped_error_sum = 0.0;
+  int clipped_errors = 0;
   for (const glm::dvec3& normal : normals) {
     const sim::IrradianceTruth truth = world.irradiance(normal, frame_index);
     const double estimated = M_PI * luminance(glm::dvec3(diffuse.sampleBilinear(normal)));
-    if (luminance(truth.clipped) > 0.0)
-      report.recordAccuracy("diffuse_irradiance_rel_error_vs_clipped",
-                            std::abs(estimated - luminance(truth.clipped)) / luminance(truth.clipped));
+    if (luminance(truth.clipped) > 0.0) {
+      const double relative = std::abs(estimated - luminance(truth.clipped)) / luminance(truth.clipped);
+      report.recordAccuracy("diffuse_irradiance_rel_error_vs_clipped", relative);
+      clipped_error_sum += relative;
+      ++clipped_errors;
+    }
     if (luminance(truth.hdr) > 0.0)
       report.recordAccuracy("diffuse_irradiance_rel_error_vs_hdr",
                             std::abs(estimated - luminance(truth.hdr)) / luminance(truth.hdr));
   }
+  return clipped_errors > 0 ? clipped_error_sum / clipped_errors : std::nan("");
 }
 
 std::string formatVector(const glm::dvec3& v) {
@@ -208,14 +225,9 @@ class Kiosk {
     if (const int status = openDisplayAndStages(); status != 0) return status;
 
     const AppSettings& settings = inputs_.settings;
-    tracking::TagDetectorSettings detector_settings;
-    detector_settings.family = inputs_.rig.tag_family;
-    detector_settings.quad_decimate = static_cast<float>(settings.tracking.quad_decimate);
-    detector_settings.nthreads = settings.tracking.threads;
-    detector_settings.quad_sigma = static_cast<float>(settings.tracking.quad_sigma);
-    detector_settings.refine_edges = settings.tracking.refine_edges;
     try {
-      tracker_ = std::make_unique<tracking::TagTracker>(detector_settings, inputs_.rig, inputs_.camera);
+      tracker_ = std::make_unique<tracking::TagTracker>(tagDetectorSettings(settings, inputs_.rig), inputs_.rig,
+                                                        inputs_.camera);
     } catch (const std::invalid_argument& bad_setting) {
       return fail(2, std::string("tracking: ") + bad_setting.what());
     }
@@ -231,6 +243,7 @@ class Kiosk {
     material_.k_reflect = static_cast<float>(settings.object.k_reflect);
     object_center_w_ = glm::dvec3(settings.object.position_w, settings.object.radius_m);
     machine_ = LightingStateMachine(settings.recalibration);
+    map_policy_ = MapUpdatePolicy(settings.map_updates);
     return 0;
   }
 
@@ -273,14 +286,8 @@ class Kiosk {
     if (settings.maps.force_8bit) capabilities_ = capabilities_.withoutExtensions();
     if (!options_.quiet) log_ << "probelight: " << display_->describe() << ": " << capabilities_.summary() << "\n";
 
-    pipeline::EnvironmentMapSettings map_settings;
-    map_settings.reflection_face_size = settings.maps.face_size;
-    map_settings.intermediate_face_size = settings.maps.diffuse_face_size;
-    map_settings.diffuse_face_size = settings.maps.diffuse_face_size;
-    map_settings.blur_sigma_rad = settings.maps.blur_sigma_rad;
-    map_settings.blur_half_taps = settings.maps.blur_half_taps;
-    map_settings.normal_iterations = settings.maps.normal_iterations;
-    if (!frame_texture_.init(capabilities_, error) || !maps_.init(capabilities_, map_settings, error) ||
+    if (!frame_texture_.init(capabilities_, error) ||
+        !maps_.init(capabilities_, environmentMapSettings(settings), error) ||
         !compositor_.init(capabilities_, pipeline::ObjectCompositorSettings{}, maps_.storage(), error))
       return fail(1, "GPU set-up failed: " + error);
     return 0;
@@ -321,6 +328,8 @@ class Kiosk {
       }
       const bool was_running = machine_.state() == AppState::kRunning;
       machine_.onButtonPress();
+      // The lights are fitted from a map made now, not a smoothed old one.
+      if (was_running) map_policy_.requestFreshMap();
       report_.count(was_running ? "button_presses_accepted" : "button_presses_ignored");
       if (!options_.quiet)
         log_ << "probelight: button: " << (was_running ? "recalibrating lights" : "already recalibrating, ignored")
@@ -353,34 +362,41 @@ class Kiosk {
       track = tracker_->track(luma_.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
     }
 
-    // Stages 2-3: the maps, only from a frame that shows the whole ball.
+    // Stages 2-3: the maps, rebuilt only from a frame that shows the whole
+    // ball, with a steady camera, and an image that says something new
+    // (map_update_policy.hpp); otherwise the last good maps stay.
     const ibl::MirrorBallView view{camera, track.pose, rig.probe_center_w, rig.probe_radius_m};
     ibl::ProbeOutline outline;
     std::string status;
-    std::string skip_reason;
     if (!track.found) {
       report_.count("frames_without_tag");
-      skip_reason = "no tag";
       status = "No tag in view: " + track.status;
     } else {
       outline = ibl::computeProbeOutline(view);
-      if (!outline.valid || !outline.fully_in_image) {
-        skip_reason = "ball not fully in view";
-        status = "Mirror ball not fully in view: lighting kept";
-      } else if (outline.radius_px < kMinProbeRadiusPx) {
-        skip_reason = "ball too small";
-        status = "Mirror ball too small in the image: lighting kept";
-      }
     }
-    const bool maps_updated = skip_reason.empty();
-    if (maps_updated) {
-      if (const int failed = updateMaps(view, rig.probe_reflectance); failed != 0) return failed;
+    MapFrameInput policy_input;
+    policy_input.tag_found = track.found;
+    policy_input.outline = outline;
+    policy_input.rotation_cam_from_world = track.pose.R_cam_from_world;
+    policy_input.luma = LumaView{luma_.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width};
+    const MapUpdateDecision decision = map_policy_.decide(policy_input);
+    recordDecision(decision);
+    if (decision.skip == MapSkipReason::kBallNotInView)
+      status = "Mirror ball not fully in view: lighting kept";
+    else if (decision.skip == MapSkipReason::kBallTooSmall)
+      status = "Mirror ball too small in the image: lighting kept";
+    if (decision.update) {
+      if (const int failed = updateMaps(view, rig.probe_reflectance, decision.new_weight); failed != 0) return failed;
+      maps_view_ = view;
     } else {
-      report_.recordStageSkip("probe_to_cube", skip_reason);
-      report_.recordStageSkip("diffuse_blur", skip_reason);
+      report_.recordStageSkip("probe_to_cube", toString(decision.skip));
+      report_.recordStageSkip(diffuseStageName(), toString(decision.skip));
     }
 
-    switch (machine_.onFrame(maps_updated)) {
+    // The state machine counts frames whose ball the maps hold: updated, or
+    // skipped because the image matched the maps already.
+    const bool maps_current = decision.update || decision.skip == MapSkipReason::kImageUnchanged;
+    switch (machine_.onFrame(maps_current)) {
       case FrameOutcome::kFitLights:
         if (const int failed = fitLights(frame_number); failed != 0) return failed;
         break;
@@ -401,27 +417,88 @@ class Kiosk {
     if (const int failed = renderAndPresent(track, status, frame_number); failed != 0) return failed;
 
     if (frame.metadata.truth) {
+      // How far the ball really moved since the previous frame: separates
+      // the camera's motion from the pose noise in center_shift_px.
+      const FrameTruth& truth = *frame.metadata.truth;
+      if (truth.probe_radius_px > 0.0) {
+        if (previous_truth_center_px_)
+          truth_center_shift_px_.add(glm::length(truth.probe_center_px - *previous_truth_center_px_));
+        previous_truth_center_px_ = truth.probe_center_px;
+      } else {
+        previous_truth_center_px_.reset();
+      }
       measureAgainstTruth(*frame.metadata.truth, track, track.found ? &outline : nullptr, report_);
-      if (world_ && maps_updated && frame_number % kTruthCheckEveryFrames == 0)
-        measureMapsAgainstTruth(*world_, frame.metadata.sequence, view, maps_, report_);
+      // Whatever the maps hold now, updated this frame or kept, against the
+      // truth now: a map kept too long (a lamp switched on) shows here.
+      if (world_ && have_maps_ && maps_view_ && frame_number % kTruthCheckEveryFrames == 0) {
+        const double diffuse_error =
+            measureMapsAgainstTruth(*world_, frame.metadata.sequence, *maps_view_, maps_, report_);
+        truth_checks_.push_back({{"frame", frame_number},
+                                 {"diffuse_irradiance_rel_error_vs_clipped", finiteOrNull(diffuse_error)},
+                                 {"frames_since_map_update", map_policy_.framesSinceUpdate()}});
+      }
     }
     return 0;
   }
 
-  int updateMaps(const ibl::MirrorBallView& view, double probe_reflectance) {
+  int updateMaps(const ibl::MirrorBallView& view, double probe_reflectance, float new_weight) {
     std::string error;
     {
       StageTimer timer(report_, "probe_to_cube");
       if (!maps_.updateReflection(frame_texture_, view, probe_reflectance, error)) return fail(1, error);
       gpuDone();
     }
-    {
-      StageTimer timer(report_, "diffuse_blur");
-      if (!maps_.updateDiffuse(error)) return fail(1, error);
+    // Temporal smoothing in both methods: diffuse = w * new + (1 - w) * previous.
+    if (inputs_.settings.maps.diffuse_method == DiffuseMethod::kSH9) {
+      StageTimer timer(report_, diffuseStageName());
+      std::vector<float> validity;
+      const std::optional<ibl::CubeMapRGB> reflection = maps_.readReflection(error, &validity);
+      if (!reflection) return fail(1, error);
+      if (!maps_.updateDiffuseFromSH9(ibl::projectToSH9(*reflection, &validity), error, new_weight))
+        return fail(1, error);
+      gpuDone();
+    } else {
+      StageTimer timer(report_, diffuseStageName());
+      if (!maps_.updateDiffuse(error, new_weight)) return fail(1, error);
       gpuDone();
     }
     have_maps_ = true;
     return 0;
+  }
+
+  void recordDecision(const MapUpdateDecision& decision) {
+    if (decision.update)
+      ++map_update_causes_[toString(decision.cause)];
+    else
+      ++map_skip_reasons_[toString(decision.skip)];
+    if (decision.center_shift_px) center_shift_px_.add(*decision.center_shift_px);
+    if (decision.radius_change_px) radius_change_px_.add(*decision.radius_change_px);
+    if (decision.rotation_change_deg) rotation_change_deg_.add(*decision.rotation_change_deg);
+    if (decision.image_change_code) image_change_code_.add(*decision.image_change_code);
+  }
+
+  nlohmann::json mapUpdatesJson() const {
+    nlohmann::json out;
+    long long updated = 0;
+    long long skipped = 0;
+    for (const auto& [cause, n] : map_update_causes_) updated += n;
+    for (const auto& [reason, n] : map_skip_reasons_) skipped += n;
+    out["updated"] = updated;
+    out["update_causes"] = map_update_causes_;
+    out["skipped"] = skipped;
+    out["skip_reasons"] = map_skip_reasons_;
+    out["smoothing_new_weight"] = map_policy_.settings().smoothing_new_weight;
+    // What the policy measured between consecutive frames (and against the
+    // maps' reference), to see its thresholds' margins on a real run.
+    nlohmann::json measured = nlohmann::json::object();
+    recordSeries(measured, "center_shift_px", center_shift_px_);
+    recordSeries(measured, "radius_change_px", radius_change_px_);
+    recordSeries(measured, "rotation_change_deg", rotation_change_deg_);
+    recordSeries(measured, "image_change_code", image_change_code_);
+    recordSeries(measured, "truth_center_shift_px", truth_center_shift_px_);  // simulator only
+    out["measured"] = measured;
+    if (!truth_checks_.empty()) out["truth_checks"] = truth_checks_;
+    return out;
   }
 
   // A recalibration has seen enough good frames: fit the lights from the
@@ -482,6 +559,7 @@ class Kiosk {
     report_.extra["gl"] = capabilities_.summary();
     report_.extra["state_at_end"] = toString(machine_.state());
     report_.extra["map_storage"] = maps_.storageDescription();
+    report_.extra["map_updates"] = mapUpdatesJson();
     const nlohmann::json json = report_.toJson(static_cast<long long>(frames_done_), elapsed_s);
     const std::filesystem::path report_path = std::filesystem::path(options_.out_dir) / "report.json";
     std::ofstream out(report_path);
@@ -491,6 +569,11 @@ class Kiosk {
       log_ << "probelight: " << frames_done_ << " frames in " << std::fixed << std::setprecision(1) << elapsed_s
            << " s; report: " << report_path.string() << "\n";
     return 0;
+  }
+
+  // The report names the diffuse stage after the method that ran.
+  const char* diffuseStageName() const {
+    return inputs_.settings.maps.diffuse_method == DiffuseMethod::kSH9 ? "diffuse_sh9" : "diffuse_blur";
   }
 
   // glFinish after a GPU stage, so that its timer measures the GPU's work.
@@ -521,6 +604,14 @@ class Kiosk {
   ibl::SceneLighting lighting_;  // no highlight until the first calibration
   glm::dvec3 object_center_w_{0.0};
   LightingStateMachine machine_;
+  MapUpdatePolicy map_policy_;
+  std::optional<ibl::MirrorBallView> maps_view_;  // the view the current maps were made from
+  std::map<std::string, long long> map_update_causes_;
+  std::map<std::string, long long> map_skip_reasons_;
+  SampleSeries center_shift_px_, radius_change_px_, rotation_change_deg_, image_change_code_;
+  SampleSeries truth_center_shift_px_;
+  std::optional<glm::dvec2> previous_truth_center_px_;
+  nlohmann::json truth_checks_ = nlohmann::json::array();
   RunReport report_;
   StatusOverlay overlay_;
   std::vector<std::uint8_t> luma_;

@@ -1,9 +1,11 @@
 // probelight's entry point: dispatches the command and maps failures to exit
-// statuses (2: bad flags or configuration, 1: runtime failure).
+// statuses (2: bad flags or configuration, 1: runtime failure, 3: analyze
+// found no tag or no ball).
 #include <iostream>
 #include <string>
 #include <vector>
 
+#include "app/analyze.hpp"
 #include "app/command_line.hpp"
 #include "app/kiosk.hpp"
 
@@ -22,6 +24,7 @@ int main(int argc, char** argv) {
   args.erase(args.begin());
   try {
     if (command == "run") return runKiosk(parseRunOptions(args), std::cerr);
+    if (command == "analyze") return runAnalyze(parseAnalyzeOptions(args), std::cerr);
     throw UsageError("unknown command '" + command + "' (see probelight --help)");
   } catch (const UsageError& error) {
     std::cerr << "probelight: " << error.what() << "\n";

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 
 #include <glm/gtc/type_ptr.hpp>
 
@@ -102,6 +103,16 @@ void setFaceUniforms(const gles::Program& program, int face) {
 
 }  // namespace
 
+ibl::CosineIrradianceSettings cosineIrradianceSettings(const EnvironmentMapSettings& settings) {
+  ibl::CosineIrradianceSettings cosine;
+  cosine.prefilter_face_size = settings.prefilter_face_size;
+  cosine.intermediate_face_size = settings.intermediate_face_size;
+  cosine.output_face_size = settings.diffuse_face_size;
+  cosine.half_taps = settings.blur_half_taps;
+  cosine.pole_direct_deg = settings.pole_direct_deg;
+  return cosine;
+}
+
 std::string cubeStorageDefines(CubeStorage storage) {
   return storage == CubeStorage::kSrgb8 ? "#define CUBE_STORAGE_SRGB8 1\n" : "";
 }
@@ -109,16 +120,26 @@ std::string cubeStorageDefines(CubeStorage storage) {
 bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const EnvironmentMapSettings& settings,
                            std::string& error) {
   settings_ = settings;
-  for (int size : {settings.reflection_face_size, settings.intermediate_face_size, settings.diffuse_face_size}) {
+  for (int size : {settings.reflection_face_size, settings.prefilter_face_size, settings.intermediate_face_size,
+                   settings.diffuse_face_size}) {
     if (size < 2 || size > capabilities.max_cube_map_size_px) {
       error = "EnvironmentMaps: cube face size " + std::to_string(size) + " must be in [2, " +
               std::to_string(capabilities.max_cube_map_size_px) + "] (the GPU's GL_MAX_CUBE_MAP_TEXTURE_SIZE)";
       return false;
     }
   }
+  // The prefilter averages whole blocks, as ibl::downsampleCubeMap; its
+  // loop bound is a compile-time constant (GLSL ES 1.00).
+  const int prefilter_factor = settings.reflection_face_size / settings.prefilter_face_size;
+  if (settings.reflection_face_size % settings.prefilter_face_size != 0 || prefilter_factor > 8) {
+    error = "EnvironmentMaps: prefilter_face_size " + std::to_string(settings.prefilter_face_size) +
+            " must divide reflection_face_size " + std::to_string(settings.reflection_face_size) +
+            " by a factor of 1..8";
+    return false;
+  }
   if (settings.normal_iterations < 0 || settings.normal_iterations > 16 || settings.blur_half_taps < 0 ||
-      settings.blur_half_taps > 32 || !(settings.blur_sigma_rad > 0.0)) {
-    error = "EnvironmentMaps: normal_iterations must be 0..16, blur_half_taps 0..32 and blur_sigma_rad > 0";
+      settings.blur_half_taps > 32 || !(settings.pole_direct_deg >= 0.0 && settings.pole_direct_deg <= 90.0)) {
+    error = "EnvironmentMaps: normal_iterations must be 0..16, blur_half_taps 0..32 and pole_direct_deg 0..90";
     return false;
   }
   framebuffer_ = gles::Framebuffer::create();
@@ -155,15 +176,26 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
       storage_defines + "#define NORMAL_ITERATIONS " + std::to_string(settings.normal_iterations) + "\n", error);
   if (!probe_program) return false;
   probe_program_ = std::move(*probe_program);
-  auto blur_program = gles::Program::fromEmbedded(
-      "cube_face.vert", "spherical_blur.frag",
-      storage_defines + "#define HALF_TAPS " + std::to_string(settings.blur_half_taps) + "\n", error);
-  if (!blur_program) return false;
-  blur_program_ = std::move(*blur_program);
+  const std::string cosine_defines = storage_defines + "#define HALF_TAPS " +
+                                     std::to_string(settings.blur_half_taps) + "\n#define PREFILTER_FACTOR " +
+                                     std::to_string(prefilter_factor) + "\n";
+  for (auto [program, pass] : {std::pair{&prefilter_program_, "PREFILTER_PASS"}, std::pair{&east_program_, "EAST_PASS"},
+                               std::pair{&north_program_, "NORTH_PASS"}}) {
+    auto compiled = gles::Program::fromEmbedded("cube_face.vert", "cosine_irradiance.frag",
+                                                cosine_defines + "#define " + pass + " 1\n", error);
+    if (!compiled) return false;
+    *program = std::move(*compiled);
+  }
+  auto sh9_program = gles::Program::fromEmbedded("cube_face.vert", "sh9_irradiance.frag", storage_defines, error);
+  if (!sh9_program) return false;
+  sh9_program_ = std::move(*sh9_program);
 
   if (!allocate(reflection_, settings.reflection_face_size, error)) return false;
+  if (!allocate(prefiltered_, settings.prefilter_face_size, error)) return false;
   if (!allocate(intermediate_, settings.intermediate_face_size, error)) return false;
   if (!allocate(diffuse_, settings.diffuse_face_size, error)) return false;
+  if (!allocate(diffuse_spare_, settings.diffuse_face_size, error)) return false;
+  diffuse_written_ = false;
   return gles::checkGl("EnvironmentMaps::init", error);
 }
 
@@ -251,13 +283,23 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
   return gles::checkGl("EnvironmentMaps::updateReflection", error);
 }
 
-bool EnvironmentMaps::setReflection(const ibl::CubeMapRGB& reflection, std::string& error) {
+bool EnvironmentMaps::setReflection(const ibl::CubeMapRGB& reflection, std::string& error,
+                                    const std::vector<float>* validity) {
   if (reflection.face_size != reflection_.face_size) {
     error = "EnvironmentMaps::setReflection: map has " + std::to_string(reflection.face_size) +
             " px faces, the reflection map is configured for " + std::to_string(reflection_.face_size);
     return false;
   }
   const size_t texel_count = static_cast<size_t>(reflection.face_size) * static_cast<size_t>(reflection.face_size);
+  if (validity != nullptr && validity->size() != texel_count * ibl::kCubeFaceCount) {
+    error = "EnvironmentMaps::setReflection: validity has " + std::to_string(validity->size()) + " values, expected " +
+            std::to_string(texel_count * ibl::kCubeFaceCount);
+    return false;
+  }
+  const auto alpha = [&](int face, size_t i) {
+    return validity == nullptr ? 1.0f
+                               : std::clamp((*validity)[static_cast<size_t>(face) * texel_count + i], 0.0f, 1.0f);
+  };
   float brightest = 1.0f;
   for (const auto& face : reflection.faces) {
     for (const glm::vec3& texel : face) brightest = std::max({brightest, texel.r, texel.g, texel.b});
@@ -275,7 +317,7 @@ bool EnvironmentMaps::setReflection(const ibl::CubeMapRGB& reflection, std::stri
           const double encoded = ibl::linearToSrgb(static_cast<double>(texels[i][c]) / scale);
           bytes[4 * i + static_cast<size_t>(c)] = static_cast<std::uint8_t>(std::lround(encoded * 255.0));
         }
-        bytes[4 * i + 3] = 255;
+        bytes[4 * i + 3] = static_cast<std::uint8_t>(std::lround(alpha(face, i) * 255.0f));
       }
       glTexSubImage2D(target, 0, 0, 0, reflection.face_size, reflection.face_size, GL_RGBA, GL_UNSIGNED_BYTE,
                       bytes.data());
@@ -283,7 +325,7 @@ bool EnvironmentMaps::setReflection(const ibl::CubeMapRGB& reflection, std::stri
       std::vector<std::uint16_t> halves(texel_count * 4u);
       for (size_t i = 0; i < texel_count; ++i) {
         for (int c = 0; c < 3; ++c) halves[4 * i + static_cast<size_t>(c)] = floatToHalf(texels[i][c]);
-        halves[4 * i + 3] = floatToHalf(1.0f);
+        halves[4 * i + 3] = floatToHalf(alpha(face, i));
       }
       glTexSubImage2D(target, 0, 0, 0, reflection.face_size, reflection.face_size, GL_RGBA, GL_HALF_FLOAT_OES,
                       halves.data());
@@ -293,37 +335,152 @@ bool EnvironmentMaps::setReflection(const ibl::CubeMapRGB& reflection, std::stri
   return gles::checkGl("glTexSubImage2D(reflection cube)", error);
 }
 
-bool EnvironmentMaps::blurPass(const GpuCubeMap& input, GpuCubeMap& output, bool north, std::string& error) {
-  const double step_rad = settings_.blur_half_taps > 0 ? 3.0 * settings_.blur_sigma_rad / settings_.blur_half_taps : 0.0;
+bool EnvironmentMaps::cosinePass(const gles::Program& program, const GpuCubeMap& input, GpuCubeMap& output,
+                                 float output_scale, const char* what, std::string& error) {
   FramebufferStateGuard guard;
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
   glViewport(0, 0, output.face_size, output.face_size);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
-  blur_program_.use();
+  program.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_CUBE_MAP, input.texture.id());
-  glUniform1i(blur_program_.uniform("u_input"), 0);
-  glUniform1f(blur_program_.uniform("u_input_face_size"), static_cast<float>(input.face_size));
-  glUniform1f(blur_program_.uniform("u_input_scale"), input.linear_scale);
-  glUniform1f(blur_program_.uniform("u_output_scale"), input.linear_scale);
-  glUniform1f(blur_program_.uniform("u_north"), north ? 1.0f : 0.0f);
-  glUniform1f(blur_program_.uniform("u_step_rad"), static_cast<float>(step_rad));
-  glUniform1f(blur_program_.uniform("u_sigma_rad"), static_cast<float>(settings_.blur_sigma_rad));
-  const GLint position = blur_program_.attribute("a_position");
+  glUniform1i(program.uniform("u_input"), 0);
+  glUniform1f(program.uniform("u_input_face_size"), static_cast<float>(input.face_size));
+  glUniform1f(program.uniform("u_input_scale"), input.linear_scale);
+  glUniform1f(program.uniform("u_output_scale"), output_scale);
+  glUniform1f(program.uniform("u_output_face_size"), static_cast<float>(output.face_size));  // prefilter only
+  const GLint position = program.attribute("a_position");
   for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face),
                            output.texture.id(), 0);
-    setFaceUniforms(blur_program_, face);
+    setFaceUniforms(program, face);
+    glUniform1f(program.uniform("u_face_index"), static_cast<float>(face));  // prefilter only
     quad_.draw(position);
   }
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, 0);
-  output.linear_scale = input.linear_scale;
-  return gles::checkGl(north ? "EnvironmentMaps blur pass (north)" : "EnvironmentMaps blur pass (east)", error);
+  output.linear_scale = output_scale;
+  return gles::checkGl(what, error);
 }
 
-bool EnvironmentMaps::updateDiffuse(std::string& error) {
-  return blurPass(reflection_, intermediate_, false, error) && blurPass(intermediate_, diffuse_, true, error);
+std::optional<float> EnvironmentMaps::diffuseBlendWeight(float new_weight, const char* caller,
+                                                         std::string& error) const {
+  if (!(new_weight >= 0.0f && new_weight <= 1.0f)) {
+    error = std::string(caller) + ": new_weight " + std::to_string(new_weight) + " must be in [0, 1]";
+    return std::nullopt;
+  }
+  return diffuse_written_ ? new_weight : 1.0f;
+}
+
+void EnvironmentMaps::bindPreviousDiffuse(const gles::Program& program, float new_weight) const {
+  // Unit 1 always holds a cube map, so the sampler is valid even when the
+  // weight-1 branch never reads it.
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, diffuse_.texture.id());
+  glUniform1i(program.uniform("u_previous"), 1);
+  glUniform1f(program.uniform("u_previous_scale"), diffuse_.linear_scale);
+  glUniform1f(program.uniform("u_new_weight"), new_weight);
+  glActiveTexture(GL_TEXTURE0);
+}
+
+void EnvironmentMaps::swapDiffuse(float linear_scale) {
+  std::swap(diffuse_, diffuse_spare_);
+  diffuse_.linear_scale = linear_scale;
+  diffuse_written_ = true;
+}
+
+namespace {
+// 8-bit output scale when blending: max(w a + (1 - w) b) <= w max(a) +
+// (1 - w) max(b), so w * new scale + (1 - w) * previous scale always holds
+// the result, and it decays back to the new scale instead of ratcheting up.
+float blendedScale(float new_scale, float previous_scale, float new_weight) {
+  return new_weight >= 1.0f ? new_scale : new_weight * new_scale + (1.0f - new_weight) * previous_scale;
+}
+}  // namespace
+
+bool EnvironmentMaps::updateDiffuse(std::string& error, float new_weight) {
+  const auto weight = diffuseBlendWeight(new_weight, "EnvironmentMaps::updateDiffuse", error);
+  if (!weight) return false;
+  // Every map below is a weighted mean of the reflection map's values (the
+  // premultiplied ones times validity <= 1, and the division by coverage
+  // gives back a weighted mean of radiance), so the reflection map's scale
+  // holds all of them.
+  const float input_scale = reflection_.linear_scale;
+  if (!cosinePass(prefilter_program_, reflection_, prefiltered_, input_scale, "EnvironmentMaps prefilter pass", error))
+    return false;
+  if (!cosinePass(east_program_, prefiltered_, intermediate_, input_scale, "EnvironmentMaps east pass", error))
+    return false;
+  const float scale =
+      storage_ == CubeStorage::kSrgb8 ? blendedScale(input_scale, diffuse_.linear_scale, *weight) : 1.0f;
+  north_program_.use();
+  bindPreviousDiffuse(north_program_, *weight);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, prefiltered_.texture.id());
+  glUniform1i(north_program_.uniform("u_prefiltered"), 2);
+  glUniform1f(north_program_.uniform("u_prefiltered_face_size"), static_cast<float>(prefiltered_.face_size));
+  glUniform1f(north_program_.uniform("u_prefiltered_scale"), prefiltered_.linear_scale);
+  glUniform1f(north_program_.uniform("u_pole_cosine"),
+              static_cast<float>(std::cos(settings_.pole_direct_deg * M_PI / 180.0)));
+  glActiveTexture(GL_TEXTURE0);
+  if (!cosinePass(north_program_, intermediate_, diffuse_spare_, scale, "EnvironmentMaps north pass", error))
+    return false;
+  swapDiffuse(scale);
+  return true;
+}
+
+bool EnvironmentMaps::updateDiffuseFromSH9(const ibl::SH9RGB& sh, std::string& error, float new_weight) {
+  const auto weight = diffuseBlendWeight(new_weight, "EnvironmentMaps::updateDiffuseFromSH9", error);
+  if (!weight) return false;
+  const std::array<glm::dvec3, ibl::kSH9Count> polynomial = ibl::sh9DiffusePolynomial(sh);
+  std::array<float, 3 * ibl::kSH9Count> uniforms{};
+  for (int k = 0; k < ibl::kSH9Count; ++k) {
+    for (int c = 0; c < 3; ++c) uniforms[static_cast<size_t>(3 * k + c)] = static_cast<float>(polynomial[k][c]);
+    if (!std::isfinite(polynomial[k].x + polynomial[k].y + polynomial[k].z)) {
+      error = "EnvironmentMaps::updateDiffuseFromSH9: coefficient " + std::to_string(k) + " is not finite";
+      return false;
+    }
+  }
+  float scale = 1.0f;
+  if (storage_ == CubeStorage::kSrgb8) {
+    // The largest value the map will hold, at its own texel centres (where
+    // the shader evaluates it): nothing clips, and dark maps keep scale 1.
+    double largest = 1.0;
+    const int n = diffuse_spare_.face_size;
+    for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+      for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+          const glm::dvec3 d = ibl::cubeTexelCenterDirection(face, x, y, n);
+          const double monomials[ibl::kSH9Count] = {1.0,       d.x,       d.y,       d.z,        d.x * d.y,
+                                                     d.y * d.z, d.x * d.z, d.z * d.z, d.x * d.x - d.y * d.y};
+          glm::dvec3 value(0.0);
+          for (int k = 0; k < ibl::kSH9Count; ++k) value += polynomial[k] * monomials[k];
+          largest = std::max({largest, value.x, value.y, value.z});
+        }
+      }
+    }
+    scale = blendedScale(static_cast<float>(largest), diffuse_.linear_scale, *weight);
+  }
+
+  FramebufferStateGuard guard;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
+  glViewport(0, 0, diffuse_spare_.face_size, diffuse_spare_.face_size);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  sh9_program_.use();
+  bindPreviousDiffuse(sh9_program_, *weight);
+  glUniform3fv(sh9_program_.uniform("u_sh[0]"), ibl::kSH9Count, uniforms.data());
+  glUniform1f(sh9_program_.uniform("u_output_scale"), scale);
+  const GLint position = sh9_program_.attribute("a_position");
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face),
+                           diffuse_spare_.texture.id(), 0);
+    setFaceUniforms(sh9_program_, face);
+    quad_.draw(position);
+  }
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, 0);
+  if (!gles::checkGl("EnvironmentMaps::updateDiffuseFromSH9", error)) return false;
+  swapDiffuse(scale);
+  return true;
 }
 
 std::optional<ibl::CubeMapRGB> EnvironmentMaps::readCube(const GpuCubeMap& map, std::string& error,
@@ -381,6 +538,10 @@ std::optional<ibl::CubeMapRGB> EnvironmentMaps::readCube(const GpuCubeMap& map, 
 
 std::optional<ibl::CubeMapRGB> EnvironmentMaps::readReflection(std::string& error, std::vector<float>* validity) const {
   return readCube(reflection_, error, validity);
+}
+std::optional<ibl::CubeMapRGB> EnvironmentMaps::readPrefiltered(std::string& error,
+                                                                std::vector<float>* validity) const {
+  return readCube(prefiltered_, error, validity);
 }
 std::optional<ibl::CubeMapRGB> EnvironmentMaps::readIntermediate(std::string& error,
                                                                  std::vector<float>* validity) const {

@@ -1,7 +1,9 @@
 // Stages 2 and 3: the mirror ball's image to a reflection cube map, and that
-// map blurred on the sphere into a diffuse cube map. GPU versions of
-// ibl::probeImageToCubeMap and two ibl::sphericalBlurPass passes (east, then
-// north), checked against them in tests/gles.
+// map integrated on the sphere into a diffuse cube map holding E(n) / pi.
+// GPU versions of ibl::probeImageToCubeMap and
+// ibl::irradianceOverPiByCosinePasses (prefilter, east cos^2 pass, north cos
+// pass with the pole correction, normalised convolution of validity),
+// checked against them in tests/gles.
 //
 // Storage (chosen at init from the capabilities):
 //   kLinearHalfFloat  RGBA half floats, rgb = linear camera units.
@@ -12,10 +14,50 @@
 //                     setReflection(); the diffuse map inherits the reflection
 //                     map's scale (a blur cannot exceed its input).
 // In both, alpha is validity: 1 where the ball shows the direction, 0 in the
-// blind spot behind the ball (where rgb is 0, as on the CPU); the diffuse
-// map's alpha is the blurred validity (the fraction of its footprint seen).
+// blind spot behind the ball (where rgb is 0, as on the CPU). The prefiltered
+// and intermediate maps hold rgb premultiplied by (blurred) validity and
+// alpha = that validity. The diffuse map's rgb is divided by it (normalised
+// convolution: the blind spot is filled from what the ball saw nearby; rgb 0
+// where alpha <= 1e-6) and its alpha stays the blurred validity: the
+// cosine-weighted fraction of the normal's hemisphere the ball saw
+// (coverage), not 1.
 // Cube maps are NEAREST-filtered; shaders filter bilinearly themselves on
 // decoded values (cube_storage.glsl), so no float-linear extension is needed.
+//
+// Two ways to make the diffuse map, same storage and convention (it holds
+// E(n) / pi, read with the normal), so ObjectCompositor and readDiffuse do
+// not care which made it:
+//   updateDiffuse          ibl::irradianceOverPiByCosinePasses: prefilter
+//                          (reflection_face_size -> prefilter_face_size),
+//                          east pass (-> intermediate_face_size), north pass
+//                          with the pole correction (-> diffuse_face_size);
+//   updateDiffuseFromSH9   R&H's 9-coefficient irradiance. GLES2 has no
+//                          compute shaders and no render-to-9-values
+//                          reduction worth its passes, so the projection runs
+//                          on the CPU: the caller does
+//                            readReflection(error, &validity)
+//                            -> ibl::projectToSH9(map, &validity)
+//                            -> updateDiffuseFromSH9(sh, error)
+//                          The read-back is 6 x 64^2 RGBA (98 KiB in 8 bits)
+//                          and the projection 27 multiply-adds a texel; see
+//                          tests/gles/sh9_and_blend_test.cpp for the times.
+//
+// Temporal blending (new_weight < 1): the new diffuse map is
+//   new_weight * fresh + (1 - new_weight) * previous
+// in linear light, alpha (validity) likewise. It is done in the final pass's
+// shader from the previous map, which lives in a second (ping-pong) texture,
+// not with glBlendColor / GL_CONSTANT_ALPHA: fixed-function blending of the
+// 8-bit maps would mix sRGB-encoded bytes (for a doubling of the light at
+// weight 0.3 that is off by 3.6-3.9% on average and up to 6.4% per texel,
+// measured in tests/gles/sh9_and_blend_test.cpp) and could not follow
+// a change of linear_scale between updates (it would mix values encoded on
+// different scales). The cost is one more diffuse-sized cube map and one
+// texel fetch per output texel. Because of the ping-pong, diffuseCube()
+// alternates between two texture names: fetch it (or diffuse()) per frame.
+// The first update after init is never blended (there is no previous map).
+// In RGBA8 a repeated update at weight w stops within ~0.6 / w 8-bit levels
+// of its target (a step smaller than half a level is rounded away): 2 levels
+// at w = 0.3; any 8-bit IIR filter has this dead band.
 #pragma once
 
 #include <optional>
@@ -26,18 +68,26 @@
 #include "gles/gl_objects.hpp"
 #include "ibl/cube_map.hpp"
 #include "ibl/mirror_ball.hpp"
+#include "ibl/spherical_blur.hpp"
+#include "ibl/spherical_harmonics.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 
 namespace probelight::pipeline {
 
+// The diffuse fields are ibl::CosineIrradianceSettings' (same defaults; see
+// cosineIrradianceSettings below).
 struct EnvironmentMapSettings {
   int reflection_face_size = 64;    // seed A: a 640x480 frame rarely shows the ball above 64 px
+  int prefilter_face_size = 16;     // about the tap spacing; must divide reflection_face_size (factor <= 8)
   int intermediate_face_size = 32;  // after the east pass
-  int diffuse_face_size = 32;
+  int diffuse_face_size = 16;
   int normal_iterations = 4;  // unrolled in the shader; ibl::ProbeToCubeParams::normal_iterations
-  double blur_sigma_rad = 0.6;  // about a cosine lobe (SEEDS: three.js PMREM)
-  int blur_half_taps = 8;
+  int blur_half_taps = 16;    // 2 * half_taps + 1 taps a pass, pi / (2 half_taps + 1) apart; 0..32
+  double pole_direct_deg = 20.0;  // north taps this close to +-Z integrate their east circle directly; 0..90
 };
+
+// The CPU reference's settings for the same maps.
+ibl::CosineIrradianceSettings cosineIrradianceSettings(const EnvironmentMapSettings& settings);
 
 enum class CubeStorage { kLinearHalfFloat, kSrgb8 };
 
@@ -57,13 +107,24 @@ class EnvironmentMaps {
   bool updateReflection(const CameraFrameTexture& camera_frame, const ibl::MirrorBallView& view,
                         double probe_reflectance, std::string& error);
   // Uploads a CPU map as the reflection map (static environments, tests).
-  bool setReflection(const ibl::CubeMapRGB& reflection, std::string& error);
-  // Stage 3: east pass into the intermediate map, north pass into the diffuse map.
-  bool updateDiffuse(std::string& error);
+  // `validity` (layout as read*'s) becomes alpha; without it alpha is 1.
+  bool setReflection(const ibl::CubeMapRGB& reflection, std::string& error,
+                     const std::vector<float>* validity = nullptr);
+  // Stage 3: prefilter pass into the prefiltered map, east pass into the
+  // intermediate map, north pass (with the pole correction and the division
+  // by coverage) into the diffuse map. new_weight in [0, 1]: the share of
+  // this update in the result (1: no blending, the map is replaced; see above).
+  bool updateDiffuse(std::string& error, float new_weight = 1.0f);
+  // Stage 3, SH9 alternative: renders max(0, E(n)) / pi from `sh` (see
+  // ibl::sh9DiffuseMap) into the diffuse map, alpha 1, blended as above. In
+  // the 8-bit storage the scale is max(1, the largest value stored).
+  bool updateDiffuseFromSH9(const ibl::SH9RGB& sh, std::string& error, float new_weight = 1.0f);
 
   // Read back in linear units (8-bit path decoded). `validity`, when given,
   // receives alpha laid out like CubeMapRGB::faces (face-major, row-major).
   std::optional<ibl::CubeMapRGB> readReflection(std::string& error, std::vector<float>* validity = nullptr) const;
+  // The prefiltered and intermediate maps as stored: rgb premultiplied by alpha.
+  std::optional<ibl::CubeMapRGB> readPrefiltered(std::string& error, std::vector<float>* validity = nullptr) const;
   std::optional<ibl::CubeMapRGB> readIntermediate(std::string& error, std::vector<float>* validity = nullptr) const;
   std::optional<ibl::CubeMapRGB> readDiffuse(std::string& error, std::vector<float>* validity = nullptr) const;
 
@@ -78,19 +139,34 @@ class EnvironmentMaps {
 
  private:
   bool allocate(GpuCubeMap& map, int face_size, std::string& error) const;
-  bool blurPass(const GpuCubeMap& input, GpuCubeMap& output, bool north, std::string& error);
+  // One pass of updateDiffuse over the six faces of `output`.
+  bool cosinePass(const gles::Program& program, const GpuCubeMap& input, GpuCubeMap& output, float output_scale,
+                  const char* what, std::string& error);
+  // Checks new_weight and returns the one to use (1 before any diffuse map exists).
+  std::optional<float> diffuseBlendWeight(float new_weight, const char* caller, std::string& error) const;
+  // Binds the current diffuse map as u_previous (texture unit 1) for
+  // diffuse_blend.glsl; the pass then writes diffuse_spare_.
+  void bindPreviousDiffuse(const gles::Program& program, float new_weight) const;
+  // Makes the freshly written spare the diffuse map.
+  void swapDiffuse(float linear_scale);
   std::optional<ibl::CubeMapRGB> readCube(const GpuCubeMap& map, std::string& error, std::vector<float>* validity) const;
 
   EnvironmentMapSettings settings_;
   CubeStorage storage_ = CubeStorage::kSrgb8;
   std::string storage_description_;
   gles::Program probe_program_;
-  gles::Program blur_program_;
+  gles::Program prefilter_program_;
+  gles::Program east_program_;
+  gles::Program north_program_;
+  gles::Program sh9_program_;
   gles::FullScreenQuad quad_;
   gles::Framebuffer framebuffer_;
   GpuCubeMap reflection_;
+  GpuCubeMap prefiltered_;
   GpuCubeMap intermediate_;
   GpuCubeMap diffuse_;
+  GpuCubeMap diffuse_spare_;  // the ping-pong partner: the next update writes here, reading diffuse_
+  bool diffuse_written_ = false;
 };
 
 // GLSL #define lines selecting a storage's encoding in cube_storage.glsl.

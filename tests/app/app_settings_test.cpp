@@ -17,11 +17,14 @@ const std::string kBoardDir = std::string(PROBELIGHT_TEST_DATA_DIR) + "/../../bo
 TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   const AppSettings from_file = loadAppSettings(kBoardDir + "/probelight.yaml");
   const AppSettings defaults;
-  EXPECT_EQ(from_file.maps.face_size, defaults.maps.face_size);
-  EXPECT_EQ(from_file.maps.diffuse_face_size, defaults.maps.diffuse_face_size);
-  EXPECT_DOUBLE_EQ(from_file.maps.blur_sigma_rad, defaults.maps.blur_sigma_rad);
-  EXPECT_EQ(from_file.maps.blur_half_taps, defaults.maps.blur_half_taps);
-  EXPECT_EQ(from_file.maps.normal_iterations, defaults.maps.normal_iterations);
+  EXPECT_EQ(from_file.maps.stages.reflection_face_size, defaults.maps.stages.reflection_face_size);
+  EXPECT_EQ(from_file.maps.stages.prefilter_face_size, defaults.maps.stages.prefilter_face_size);
+  EXPECT_EQ(from_file.maps.stages.intermediate_face_size, defaults.maps.stages.intermediate_face_size);
+  EXPECT_EQ(from_file.maps.stages.diffuse_face_size, defaults.maps.stages.diffuse_face_size);
+  EXPECT_EQ(from_file.maps.stages.blur_half_taps, defaults.maps.stages.blur_half_taps);
+  EXPECT_DOUBLE_EQ(from_file.maps.stages.pole_direct_deg, defaults.maps.stages.pole_direct_deg);
+  EXPECT_EQ(from_file.maps.stages.normal_iterations, defaults.maps.stages.normal_iterations);
+  EXPECT_EQ(from_file.maps.diffuse_method, defaults.maps.diffuse_method);
   EXPECT_EQ(from_file.maps.force_8bit, defaults.maps.force_8bit);
   EXPECT_DOUBLE_EQ(from_file.tracking.quad_decimate, defaults.tracking.quad_decimate);
   EXPECT_EQ(from_file.tracking.threads, defaults.tracking.threads);
@@ -32,6 +35,13 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.sim.env, defaults.sim.env);
   EXPECT_EQ(from_file.sim.camera_path, defaults.sim.camera_path);
   EXPECT_EQ(from_file.sim.lamp_on_frame, defaults.sim.lamp_on_frame);
+  EXPECT_DOUBLE_EQ(from_file.map_updates.min_probe_radius_px, defaults.map_updates.min_probe_radius_px);
+  EXPECT_DOUBLE_EQ(from_file.map_updates.max_center_shift_px, defaults.map_updates.max_center_shift_px);
+  EXPECT_DOUBLE_EQ(from_file.map_updates.max_radius_change_px, defaults.map_updates.max_radius_change_px);
+  EXPECT_DOUBLE_EQ(from_file.map_updates.max_rotation_change_deg, defaults.map_updates.max_rotation_change_deg);
+  EXPECT_DOUBLE_EQ(from_file.map_updates.change_threshold_code, defaults.map_updates.change_threshold_code);
+  EXPECT_EQ(from_file.map_updates.max_age_frames, defaults.map_updates.max_age_frames);
+  EXPECT_DOUBLE_EQ(from_file.map_updates.smoothing_new_weight, defaults.map_updates.smoothing_new_weight);
   EXPECT_EQ(from_file.save_every, defaults.save_every);
   EXPECT_EQ(from_file.gpu_finish, defaults.gpu_finish);
 }
@@ -50,9 +60,9 @@ TEST(AppSettings, PartialFileChangesOnlyWhatItLists) {
   std::fputs("environment_maps:\n  face_size: 128\nsim:\n  lamp_on_frame: 30\n", file);
   std::fclose(file);
   const AppSettings settings = loadAppSettings(path);
-  EXPECT_EQ(settings.maps.face_size, 128);
+  EXPECT_EQ(settings.maps.stages.reflection_face_size, 128);
   EXPECT_EQ(settings.sim.lamp_on_frame, 30);
-  EXPECT_EQ(settings.maps.diffuse_face_size, AppSettings{}.maps.diffuse_face_size);
+  EXPECT_EQ(settings.maps.stages.diffuse_face_size, AppSettings{}.maps.stages.diffuse_face_size);
 }
 
 TEST(AppSettings, ObjectMustRestOnTheGround) {
@@ -67,6 +77,31 @@ TEST(AppSettings, ObjectMustRestOnTheGround) {
   } catch (const config::ConfigError& error) {
     EXPECT_NE(std::string(error.what()).find("object.position"), std::string::npos) << error.what();
   }
+}
+
+// A smoothing weight of 0 would keep the first map for ever: refused, with
+// the file and the field named.
+TEST(AppSettings, MapUpdateFieldsAreRangeChecked) {
+  const std::string path = ::testing::TempDir() + "/map_updates_probelight.yaml";
+  auto expectRejected = [&](const std::string& text, const std::string& field) {
+    FILE* file = std::fopen(path.c_str(), "w");
+    ASSERT_NE(file, nullptr);
+    std::fputs(text.c_str(), file);
+    std::fclose(file);
+    try {
+      loadAppSettings(path);
+      FAIL() << text << " was accepted";
+    } catch (const config::ConfigError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(field), std::string::npos) << message;
+      EXPECT_NE(message.find(path), std::string::npos) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+  };
+  expectRejected("map_updates:\n  smoothing_new_weight: 0\n", "map_updates.smoothing_new_weight");
+  expectRejected("map_updates:\n  max_age_frames: 0\n", "map_updates.max_age_frames");
+  expectRejected("map_updates:\n  max_center_shift_px: -1\n", "map_updates.max_center_shift_px");
+  expectRejected("map_updates:\n  change_treshold_code: 3\n", "change_treshold_code");
 }
 
 }  // namespace

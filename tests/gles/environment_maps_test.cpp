@@ -1,5 +1,5 @@
-// Stages 1-3 on the GPU against the CPU reference (ibl::probeImageToCubeMap,
-// ibl::sphericalBlurPass), for both cube storages.
+// Stage 2 on the GPU against the CPU reference (ibl::probeImageToCubeMap),
+// for both cube storages.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,7 +11,6 @@
 #include "gles_test_support.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_to_cube.hpp"
-#include "ibl/spherical_blur.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
 
@@ -196,136 +195,8 @@ INSTANTIATE_TEST_SUITE_P(Storage, ProbeToCubeTest, ::testing::Values(false, true
                            return info.param ? std::string("Forced8Bit") : std::string("Native");
                          });
 
-// A map with a bright lamp (3x the sky) and a dark hole, so the blur moves
-// energy over face edges and the 8-bit path has to use a scale above 1.
-ibl::CubeMapRGB lampEnvironment(int face_size) {
-  ibl::CubeMapRGB cube(face_size);
-  const glm::dvec3 lamp = glm::normalize(glm::dvec3(-0.5, 0.45, 0.74));
-  const glm::dvec3 hole = glm::normalize(glm::dvec3(0.2, -0.9, -0.4));
-  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
-    for (int y = 0; y < face_size; ++y) {
-      for (int x = 0; x < face_size; ++x) {
-        const glm::dvec3 d = ibl::cubeTexelCenterDirection(face, x, y, face_size);
-        glm::dvec3 value = test::analyticEnvironment(d);
-        if (glm::dot(d, lamp) > std::cos(0.25)) value += glm::dvec3(3.0, 2.6, 2.0);
-        if (glm::dot(d, hole) > std::cos(0.4)) value = glm::dvec3(0.0);
-        cube.texel(face, x, y) = glm::vec3(value);
-      }
-    }
-  }
-  return cube;
-}
-
-struct BlurComparison {
-  double max_error = 0.0;
-  double max_excess = -1e9;
-};
-
-// Tolerance per texel, in linear units:
-//  - storage of the output: half floats round to 11 significant bits
-//    (relative 2^-11); RGBA8 rounds the encoded value by up to 0.5/255, i.e.
-//    scale * slope(encoded) * 0.5/255 in linear units (slope of the sRGB
-//    decode, up to 2.3 at white);
-//  - fp32 arithmetic in the shader: tap directions carry an error of at most
-//    ~1e-5 rad (single-precision rounding through normalize, cross and the
-//    tap rotation, plus llvmpipe's polynomial sin/cos), which moves each
-//    bilinear sample by up to 1e-5 * face_size texels (ds/dangle <= 1 per
-//    face unit, face = 2 units wide = N texels). Across a hard edge of height
-//    input_max that changes the weighted mean by <= input_max * 1e-5 * N.
-BlurComparison compareBlur(const ibl::CubeMapRGB& gpu, const ibl::CubeMapRGB& cpu, pipeline::CubeStorage storage,
-                           float linear_scale, double input_max, int input_face_size) {
-  BlurComparison result;
-  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
-    for (int y = 0; y < cpu.face_size; ++y) {
-      for (int x = 0; x < cpu.face_size; ++x) {
-        for (int c = 0; c < 3; ++c) {
-          const double expected = cpu.texel(face, x, y)[c];
-          const double error = std::abs(gpu.texel(face, x, y)[c] - expected);
-          double tolerance = input_max * 1e-5 * input_face_size;
-          if (storage == pipeline::CubeStorage::kLinearHalfFloat) {
-            tolerance += std::abs(expected) * std::ldexp(1.0, -11);
-          } else {
-            const double encoded = ibl::linearToSrgb(expected / linear_scale);
-            tolerance += linear_scale * test::srgbDecodeSlope(std::min(1.0, encoded + 0.5 / 255.0)) * 0.5 / 255.0;
-          }
-          result.max_error = std::max(result.max_error, error);
-          result.max_excess = std::max(result.max_excess, error - tolerance);
-        }
-      }
-    }
-  }
-  return result;
-}
-
-class SphericalBlurTest : public GpuTest, public ::testing::WithParamInterface<bool> {};
-
-// Each pass is compared with the CPU pass run on exactly what the GPU pass
-// read (the GPU's previous map, read back and decoded), so the errors of one
-// pass do not leak into the next one's tolerance.
-TEST_P(SphericalBlurTest, EachPassMatchesCpuReference) {
-  const bool force_8bit = GetParam();
-  const gles::Capabilities caps =
-      force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
-  std::string error;
-  pipeline::EnvironmentMaps maps;
-  ASSERT_TRUE(maps.init(caps, {}, error)) << error;
-  if (!force_8bit && maps.storage() != pipeline::CubeStorage::kLinearHalfFloat) {
-    GTEST_SKIP() << "this GPU cannot render half floats: " << maps.storageDescription();
-  }
-  ASSERT_TRUE(maps.setReflection(lampEnvironment(maps.settings().reflection_face_size), error)) << error;
-  const auto gpu_start = std::chrono::steady_clock::now();
-  ASSERT_TRUE(maps.updateDiffuse(error)) << error;
-  glFinish();
-  const double gpu_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - gpu_start).count();
-
-  const auto reflection = maps.readReflection(error);
-  ASSERT_TRUE(reflection) << error;
-  const auto intermediate = maps.readIntermediate(error);
-  ASSERT_TRUE(intermediate) << error;
-  const auto diffuse = maps.readDiffuse(error);
-  ASSERT_TRUE(diffuse) << error;
-  ASSERT_TRUE(test::allFinite(*reflection) && test::allFinite(*intermediate) && test::allFinite(*diffuse));
-
-  ibl::SphericalBlurPass pass;
-  pass.sigma_rad = maps.settings().blur_sigma_rad;
-  pass.half_taps = maps.settings().blur_half_taps;
-  pass.axis = ibl::BlurAxis::kEast;
-  const auto cpu_start = std::chrono::steady_clock::now();
-  const ibl::CubeMapRGB cpu_east = ibl::sphericalBlurPass(*reflection, maps.settings().intermediate_face_size, pass);
-  pass.axis = ibl::BlurAxis::kNorth;
-  const ibl::CubeMapRGB cpu_north = ibl::sphericalBlurPass(*intermediate, maps.settings().diffuse_face_size, pass);
-  const double cpu_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cpu_start).count();
-
-  const float scale = maps.diffuse().linear_scale;
-  float input_max = 0.0f;
-  for (const auto& face : reflection->faces) {
-    for (const glm::vec3& texel : face) input_max = std::max({input_max, texel.r, texel.g, texel.b});
-  }
-  const BlurComparison east = compareBlur(*intermediate, cpu_east, maps.storage(), scale, input_max,
-                                          maps.settings().reflection_face_size);
-  const BlurComparison north = compareBlur(*diffuse, cpu_north, maps.storage(), scale, input_max,
-                                           maps.settings().intermediate_face_size);
-  std::printf("[ measure  ] blur %s (scale %.2f): east max |GPU-CPU| %.2e, north %.2e; GPU %.2f ms, CPU %.2f ms\n",
-              maps.storageDescription().c_str(), scale, east.max_error, north.max_error, gpu_ms, cpu_ms);
-  EXPECT_LE(east.max_excess, 0.0);
-  EXPECT_LE(north.max_excess, 0.0);
-  if (maps.storage() == pipeline::CubeStorage::kSrgb8) {
-    // The lamp must survive the 8-bit path instead of clipping at 1: the
-    // scale is the brightest texel (read back within one 8-bit step of it).
-    EXPECT_GT(scale, 3.0f);
-    EXPECT_NEAR(input_max, scale, scale * test::srgbDecodeSlope(1.0) / 255.0);
-  }
-  // The blur must actually spread the lamp: its direction's diffuse value is
-  // far below the lamp's own brightness but well above the sky beside it.
-  const glm::dvec3 lamp = glm::normalize(glm::dvec3(-0.5, 0.45, 0.74));
-  EXPECT_LT(diffuse->sampleNearest(lamp).r, 2.0f);
-  EXPECT_GT(diffuse->sampleNearest(lamp).r, test::analyticEnvironment(lamp).r + 0.1);
-}
-
-INSTANTIATE_TEST_SUITE_P(Storage, SphericalBlurTest, ::testing::Values(false, true),
-                         [](const ::testing::TestParamInfo<bool>& info) {
-                           return info.param ? std::string("Forced8Bit") : std::string("Native");
-                         });
+// Stage 3 (the diffuse map) is tested against ibl::irradianceOverPiByCosinePasses
+// in cosine_irradiance_test.cpp.
 
 }  // namespace
 }  // namespace probelight

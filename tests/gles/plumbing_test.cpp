@@ -76,11 +76,14 @@ TEST_F(GpuTest, MissingEmbeddedShaderIsReportedByName) {
 
 TEST_F(GpuTest, EveryEmbeddedShaderProgramCompilesForBothStorages) {
   const auto& shaders = gles::embeddedShaders();
-  ASSERT_TRUE(shaders.count("probe_to_cube.frag") && shaders.count("spherical_blur.frag"));
+  ASSERT_TRUE(shaders.count("probe_to_cube.frag") && shaders.count("cosine_irradiance.frag"));
   for (const char* defines : {"", "#define CUBE_STORAGE_SRGB8 1\n"}) {
     std::string error;
     EXPECT_TRUE(gles::Program::fromEmbedded("cube_face.vert", "probe_to_cube.frag", defines, error)) << error;
-    EXPECT_TRUE(gles::Program::fromEmbedded("cube_face.vert", "spherical_blur.frag", defines, error)) << error;
+    for (const char* pass : {"#define PREFILTER_PASS 1\n", "#define EAST_PASS 1\n", "#define NORTH_PASS 1\n"}) {
+      EXPECT_TRUE(gles::Program::fromEmbedded("cube_face.vert", "cosine_irradiance.frag", std::string(defines) + pass, error))
+          << error;
+    }
     EXPECT_TRUE(gles::Program::fromEmbedded("sphere_object.vert", "sphere_object.frag", defines, error)) << error;
   }
 }

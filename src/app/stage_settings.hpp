@@ -1,0 +1,22 @@
+// AppSettings (probelight.yaml) turned into the settings of the pipeline's
+// stages, in one place, so that `probelight run` and `probelight analyze`
+// build the same tracker and the same maps from the same file and their
+// numbers can be compared.
+#pragma once
+
+#include "app/app_settings.hpp"
+#include "core/types.hpp"
+#include "pipeline/environment_maps.hpp"
+#include "tracking/tag_detector.hpp"
+
+namespace probelight {
+
+// The detector settings of probelight.yaml's `tracking` section, with the
+// family the rig names (the tracker insists they agree).
+tracking::TagDetectorSettings tagDetectorSettings(const AppSettings& settings, const RigGeometry& rig);
+
+// The `environment_maps` section as the GPU stages take it (force_8bit is not
+// here: it changes the capabilities the stages are given, not their settings).
+pipeline::EnvironmentMapSettings environmentMapSettings(const AppSettings& settings);
+
+}  // namespace probelight
