@@ -2,6 +2,8 @@
 
 #include <charconv>
 #include <functional>
+#include <map>
+#include <optional>
 
 namespace probelight {
 
@@ -27,12 +29,44 @@ void requireChoice(const std::string& flag, const std::string& value, const std:
   throw UsageError("flag " + flag + ": unknown value '" + value + "' (choose " + list + ")");
 }
 
+using FlagSetter = std::function<void(const std::string& flag, const std::string& value)>;
+
+// Walks `--flag value` and `--flag=value` pairs, calling the flag's setter.
+// `switches` are flags without a value. `command` prefixes the unknown-flag
+// message ("analyze: ..."), empty for run.
+void parseFlags(const std::vector<std::string>& args, const std::map<std::string, FlagSetter>& valued,
+                const std::map<std::string, std::function<void()>>& switches, const std::string& command) {
+  for (size_t i = 0; i < args.size(); ++i) {
+    std::string flag = args[i];
+    std::optional<std::string> inline_value;
+    if (auto eq = flag.find('='); flag.rfind("--", 0) == 0 && eq != std::string::npos) {
+      inline_value = flag.substr(eq + 1);
+      flag = flag.substr(0, eq);
+    }
+    if (auto on = switches.find(flag); on != switches.end() && !inline_value) {
+      on->second();
+      continue;
+    }
+    auto it = valued.find(flag);
+    if (it == valued.end())
+      throw UsageError((command.empty() ? "" : command + ": ") + "unknown flag '" + flag + "' (see probelight --help)");
+    std::string value;
+    if (inline_value) {
+      value = *inline_value;
+    } else {
+      if (i + 1 >= args.size()) throw UsageError("flag " + flag + " needs a value");
+      value = args[++i];
+    }
+    if (value.empty()) throw UsageError("flag " + flag + " needs a value");
+    it->second(flag, value);
+  }
+}
+
 }  // namespace
 
 RunOptions parseRunOptions(const std::vector<std::string>& args) {
   RunOptions options;
-  using Setter = std::function<void(const std::string& flag, const std::string& value)>;
-  const std::map<std::string, Setter> valued = {
+  const std::map<std::string, FlagSetter> valued = {
       {"--source", [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images"}); options.source = v; }},
       {"--images", [&](auto&, auto& v) { options.images = v; }},
       {"--display", [&](auto& f, auto& v) { requireChoice(f, v, {"headless"}); options.display = v; }},
@@ -47,29 +81,7 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
       {"--path", [&](auto&, auto& v) { options.sim_path = v; }},
       {"--save-every", [&](auto& f, auto& v) { options.save_every = static_cast<int>(parseInteger(f, v, 0)); }},
   };
-  for (size_t i = 0; i < args.size(); ++i) {
-    std::string flag = args[i];
-    std::optional<std::string> inline_value;
-    if (auto eq = flag.find('='); flag.rfind("--", 0) == 0 && eq != std::string::npos) {
-      inline_value = flag.substr(eq + 1);
-      flag = flag.substr(0, eq);
-    }
-    if (flag == "--quiet" && !inline_value) {
-      options.quiet = true;
-      continue;
-    }
-    auto it = valued.find(flag);
-    if (it == valued.end()) throw UsageError("unknown flag '" + flag + "' (see probelight --help)");
-    std::string value;
-    if (inline_value) {
-      value = *inline_value;
-    } else {
-      if (i + 1 >= args.size()) throw UsageError("flag " + flag + " needs a value");
-      value = args[++i];
-    }
-    if (value.empty()) throw UsageError("flag " + flag + " needs a value");
-    it->second(flag, value);
-  }
+  parseFlags(args, valued, {{"--quiet", [&] { options.quiet = true; }}}, "");
   if (options.source == "images" && options.images.empty())
     throw UsageError("flag --source images needs --images FOLDER_OR_GLOB");
   if (options.source == "images" && options.camera_path.empty())
@@ -81,29 +93,14 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
 
 AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
   AnalyzeOptions options;
-  const std::map<std::string, std::string*> valued = {
-      {"--frame", &options.frame_path}, {"--camera", &options.camera_path}, {"--rig", &options.rig_path},
-      {"--out", &options.out_dir},      {"--config", &options.config_path},
-  };
-  for (size_t i = 0; i < args.size(); ++i) {
-    std::string flag = args[i];
-    std::optional<std::string> inline_value;
-    if (auto eq = flag.find('='); flag.rfind("--", 0) == 0 && eq != std::string::npos) {
-      inline_value = flag.substr(eq + 1);
-      flag = flag.substr(0, eq);
-    }
-    auto it = valued.find(flag);
-    if (it == valued.end()) throw UsageError("analyze: unknown flag '" + flag + "' (see probelight --help)");
-    std::string value;
-    if (inline_value) {
-      value = *inline_value;
-    } else {
-      if (i + 1 >= args.size()) throw UsageError("flag " + flag + " needs a value");
-      value = args[++i];
-    }
-    if (value.empty()) throw UsageError("flag " + flag + " needs a value");
-    *it->second = value;
-  }
+  auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
+  parseFlags(args,
+             {{"--frame", into(options.frame_path)},
+              {"--camera", into(options.camera_path)},
+              {"--rig", into(options.rig_path)},
+              {"--out", into(options.out_dir)},
+              {"--config", into(options.config_path)}},
+             {}, "analyze");
   // No defaults for these: analysing a frame with some other camera's
   // calibration, or writing over someone's folder, gives plausible nonsense.
   if (options.frame_path.empty()) throw UsageError("analyze needs --frame FILE (the camera frame to analyse)");
