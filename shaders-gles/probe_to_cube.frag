@@ -23,6 +23,17 @@
 #define BLIND_SPOT_LENGTH 1e-3
 #endif
 
+// The camera's transfer (ibl::CameraTransfer), chosen when the program is
+// built: sRGB unless CAMERA_TRANSFER_GAMMA or CAMERA_TRANSFER_LINEAR.
+#if defined(CAMERA_TRANSFER_LINEAR)
+vec3 decodeCamera(vec3 encoded) { return clamp(encoded, 0.0, 1.0); }
+#elif defined(CAMERA_TRANSFER_GAMMA)
+uniform float u_camera_gamma;
+vec3 decodeCamera(vec3 encoded) { return pow(clamp(encoded, 0.0, 1.0), vec3(u_camera_gamma)); }
+#else
+vec3 decodeCamera(vec3 encoded) { return srgbToLinear(encoded); }
+#endif
+
 varying vec2 v_face_st;
 
 uniform vec3 u_face_center;  // direction at (s, t) = (0.5, 0.5)
@@ -64,6 +75,6 @@ void main() {
   vec2 normalized = (u_center_normalized + offset.xy) / max(depth_ratio, 1e-3);
   vec2 distorted = distortNormalized(normalized, u_distortion, u_distortion_k3);
   vec2 texcoord = u_center_texcoord + (distorted - u_center_distorted) * u_focal_over_size;
-  vec3 linear = srgbToLinear(texture2D(u_camera, texcoord).rgb) * u_inverse_reflectance;
+  vec3 linear = decodeCamera(texture2D(u_camera, texcoord).rgb) * u_inverse_reflectance;
   gl_FragColor = blind ? vec4(0.0) : encodeCubeTexel(linear, 1.0, u_storage_scale);
 }

@@ -17,4 +17,17 @@ double linearToSrgb(double linear) {
   return l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
 }
 
+double decodeCameraValue(const CameraTransfer& transfer, double encoded) {
+  const double clamped = std::clamp(encoded, 0.0, 1.0);
+  switch (transfer.curve) {
+    case CameraTransfer::Curve::kLinear:
+      return clamped;
+    case CameraTransfer::Curve::kGamma:
+      return std::pow(clamped, transfer.gamma);
+    case CameraTransfer::Curve::kSrgb:
+      break;
+  }
+  return srgbToLinear(clamped);
+}
+
 }  // namespace probelight::ibl

@@ -8,4 +8,16 @@ namespace probelight::ibl {
 double srgbToLinear(double encoded);
 double linearToSrgb(double linear);
 
+// How the camera encodes light in its 8-bit values (its "transfer"). sRGB is
+// what libcamera's YUV and most webcams deliver; a camera tuned to a plain
+// power law, or one delivering linear values, is configured here.
+struct CameraTransfer {
+  enum class Curve { kSrgb, kGamma, kLinear };
+  Curve curve = Curve::kSrgb;
+  double gamma = 2.2;  // kGamma only: linear = encoded ^ gamma
+};
+
+// Encoded value in [0, 1] (clamped) to linear light in [0, 1].
+double decodeCameraValue(const CameraTransfer& transfer, double encoded);
+
 }  // namespace probelight::ibl

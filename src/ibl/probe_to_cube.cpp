@@ -46,7 +46,9 @@ CubeMapRGB probeImageToCubeMap(const MirrorBallView& view, const ImageRGB8& imag
         const auto pixel = reflectedDirectionToPixel(view, direction_w, params.normal_iterations);
         if (!pixel) continue;  // blind spot: stays 0
         const glm::dvec3 encoded = sampleEncodedBilinear(image, *pixel);
-        const glm::dvec3 linear{srgbToLinear(encoded.r), srgbToLinear(encoded.g), srgbToLinear(encoded.b)};
+        const CameraTransfer& transfer = params.camera_transfer;
+        const glm::dvec3 linear{decodeCameraValue(transfer, encoded.r), decodeCameraValue(transfer, encoded.g),
+                                decodeCameraValue(transfer, encoded.b)};
         cube.texel(face, x, y) = glm::vec3(linear * inverse_reflectance);
       }
     }

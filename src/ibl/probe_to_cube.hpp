@@ -2,6 +2,7 @@
 #pragma once
 
 #include "core/types.hpp"
+#include "ibl/color_transfer.hpp"
 #include "ibl/cube_map.hpp"
 #include "ibl/mirror_ball.hpp"
 
@@ -11,12 +12,13 @@ struct ProbeToCubeParams {
   int face_size = 64;
   double probe_reflectance = 1.0;
   int normal_iterations = 4;  // fixed-point steps, the same count the shader unrolls
+  CameraTransfer camera_transfer;  // how the image's values decode to linear light
 };
 
 // For every texel centre direction r: find the pixel that shows r in the ball
 // (reflectedDirectionToPixel with params.normal_iterations), sample the 8-bit
-// image bilinearly in its encoded values, decode sRGB to linear and divide by
-// probe_reflectance. Texels whose direction is not visible get 0.
+// image bilinearly in its encoded values, decode the camera transfer (sRGB by
+// default) to linear light and divide by probe_reflectance. Texels whose direction is not visible get 0.
 // Pixel positions follow OpenCV's calibration convention everywhere in
 // probelight: pixel (u, v)'s centre is at integer (u, v) (cx ~ (w - 1) / 2),
 // as projectToPixel returns. A GL texture is therefore sampled at

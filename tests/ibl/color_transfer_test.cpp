@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace probelight::ibl {
 namespace {
 
@@ -39,6 +41,29 @@ TEST(ColorTransfer, EveryEightBitCodeRoundTripsAndOrderIsKept) {
 TEST(ColorTransfer, OutOfRangeInputsClampLikeAnEightBitTarget) {
   EXPECT_DOUBLE_EQ(linearToSrgb(4.0), linearToSrgb(1.0));
   EXPECT_DOUBLE_EQ(srgbToLinear(-0.5), 0.0);
+}
+
+}  // namespace
+}  // namespace probelight::ibl
+
+namespace probelight::ibl {
+namespace {
+
+TEST(CameraTransferDecode, EachCurveDecodesItsOwnEncoding) {
+  const CameraTransfer srgb{};
+  const CameraTransfer gamma{CameraTransfer::Curve::kGamma, 1.8};
+  const CameraTransfer linear{CameraTransfer::Curve::kLinear, 0.0};
+  for (double value : {0.0, 0.01, 0.2, 0.5, 0.9, 1.0}) {
+    EXPECT_NEAR(decodeCameraValue(srgb, linearToSrgb(value)), value, 1e-12);
+    EXPECT_NEAR(decodeCameraValue(gamma, std::pow(value, 1.0 / 1.8)), value, 1e-12);
+    EXPECT_DOUBLE_EQ(decodeCameraValue(linear, value), value);
+  }
+  // Out-of-range inputs clamp, as the shader's clamp() does.
+  EXPECT_DOUBLE_EQ(decodeCameraValue(gamma, 1.5), 1.0);
+  EXPECT_DOUBLE_EQ(decodeCameraValue(srgb, -0.5), 0.0);
+  // Mid-grey code 128 is 0.216 linear in sRGB but 0.289 under gamma 1.8:
+  // the choice matters by a third, so a wrong default would show.
+  EXPECT_GT(decodeCameraValue(gamma, 128.0 / 255.0) / decodeCameraValue(srgb, 128.0 / 255.0), 1.3);
 }
 
 }  // namespace
