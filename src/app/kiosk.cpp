@@ -385,6 +385,10 @@ class Kiosk {
       status = "Mirror ball not fully in view: lighting kept";
     else if (decision.skip == MapSkipReason::kBallTooSmall)
       status = "Mirror ball too small in the image: lighting kept";
+    else if (decision.skip == MapSkipReason::kBallSaturated)
+      status = "Mirror ball image all white (overexposed?): lighting kept";
+    else if (decision.skip == MapSkipReason::kBallDark)
+      status = "Mirror ball image all black (covered?): lighting kept";
     if (decision.update) {
       if (const int failed = updateMaps(view, rig.probe_reflectance, decision.new_weight); failed != 0) return failed;
       maps_view_ = view;

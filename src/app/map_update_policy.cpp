@@ -24,6 +24,8 @@ const char* toString(MapSkipReason reason) {
     case MapSkipReason::kNoTag: return "no tag";
     case MapSkipReason::kBallNotInView: return "ball not fully in view";
     case MapSkipReason::kBallTooSmall: return "ball too small";
+    case MapSkipReason::kBallSaturated: return "ball saturated";
+    case MapSkipReason::kBallDark: return "ball dark";
     case MapSkipReason::kCameraMoving: return "camera moving";
     case MapSkipReason::kImageUnchanged: return "ball image unchanged";
   }
@@ -48,7 +50,11 @@ BallSignature sampleBallSignature(const LumaView& luma, glm::dvec2 center_px, do
   signature.radius_px = radius_px;
   signature.mean.assign(n * n, 0.0f);
   signature.count.assign(n * n, 0);
-  if (!luma.data || luma.width <= 0 || luma.height <= 0 || !(radius_px > 0.0)) return signature;
+  // Non-finite numbers would make the pixel bounds below undefined (a NaN
+  // cast to int); such a signature simply holds no pixel.
+  if (!luma.data || luma.width <= 0 || luma.height <= 0 || !(radius_px > 0.0) || !std::isfinite(radius_px) ||
+      !std::isfinite(center_px.x) || !std::isfinite(center_px.y))
+    return signature;
 
   const double extent = BallSignature::kExtent * radius_px;
   const double cell = 2.0 * extent / n;
@@ -72,6 +78,23 @@ BallSignature sampleBallSignature(const LumaView& luma, glm::dvec2 center_px, do
   for (int i = 0; i < n * n; ++i)
     if (signature.count[i] > 0) signature.mean[i] = static_cast<float>(sum[i] / signature.count[i]);
   return signature;
+}
+
+BallExposure measureBallExposure(const BallSignature& signature) {
+  BallExposure exposure;
+  int saturated = 0;
+  int dark = 0;
+  for (size_t i = 0; i < signature.mean.size() && i < signature.count.size(); ++i) {
+    if (signature.count[i] == 0) continue;
+    ++exposure.cells;
+    if (signature.mean[i] >= kSaturatedCode) ++saturated;
+    if (signature.mean[i] <= kDarkCode) ++dark;
+  }
+  if (exposure.cells > 0) {
+    exposure.saturated_fraction = static_cast<double>(saturated) / exposure.cells;
+    exposure.dark_fraction = static_cast<double>(dark) / exposure.cells;
+  }
+  return exposure;
 }
 
 std::optional<double> signatureDifference(const BallSignature& a, const BallSignature& b) {
@@ -104,7 +127,13 @@ MapUpdateDecision MapUpdatePolicy::decide(const MapFrameInput& frame) {
     return skip(MapSkipReason::kNoTag);
   }
   const ibl::ProbeOutline& outline = frame.outline;
-  if (!outline.valid) {
+  // A non-finite outline or pose (NaN from a degenerate pose) is no outline:
+  // every comparison below would be false and the sampling undefined.
+  const glm::dmat3& R = frame.rotation_cam_from_world;
+  const bool finite = std::isfinite(outline.center_px.x) && std::isfinite(outline.center_px.y) &&
+                      std::isfinite(outline.radius_px) && std::isfinite(R[0][0] + R[0][1] + R[0][2] + R[1][0] +
+                                                                        R[1][1] + R[1][2] + R[2][0] + R[2][1] + R[2][2]);
+  if (!outline.valid || !finite) {
     previous_.reset();
     return skip(MapSkipReason::kBallNotInView);
   }
@@ -124,6 +153,18 @@ MapUpdateDecision MapUpdatePolicy::decide(const MapFrameInput& frame) {
 
   if (!outline.fully_in_image) return skip(MapSkipReason::kBallNotInView);
   if (outline.radius_px < settings_.min_probe_radius_px) return skip(MapSkipReason::kBallTooSmall);
+
+  // This frame's own signature: the exposure test here, the new reference
+  // below when the maps are updated. Checked before "no maps yet": a white
+  // or black map is worse than none (the object would be drawn lit wrongly),
+  // and after it, it would replace the last good one.
+  BallSignature now = sampleBallSignature(frame.luma, outline.center_px, outline.radius_px);
+  const BallExposure exposure = measureBallExposure(now);
+  decision.saturated_fraction = exposure.saturated_fraction;
+  decision.dark_fraction = exposure.dark_fraction;
+  if (exposure.cells > 0 && exposure.saturated_fraction >= kUnusableCellFraction)
+    return skip(MapSkipReason::kBallSaturated);
+  if (exposure.cells > 0 && exposure.dark_fraction >= kUnusableCellFraction) return skip(MapSkipReason::kBallDark);
 
   const float smoothed_weight = static_cast<float>(std::clamp(settings_.smoothing_new_weight, 0.0, 1.0));
   if (!have_maps_) {
@@ -153,7 +194,6 @@ MapUpdateDecision MapUpdatePolicy::decide(const MapFrameInput& frame) {
 
   // Update: the reference becomes what the maps now hold, on this frame's grid.
   decision.update = true;
-  BallSignature now = sampleBallSignature(frame.luma, outline.center_px, outline.radius_px);
   if (decision.new_weight < 1.0f && !reference_.empty()) {
     const float w = decision.new_weight;
     for (size_t i = 0; i < now.mean.size(); ++i)

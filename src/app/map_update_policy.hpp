@@ -12,6 +12,11 @@
 //   no tag                     -> skip "no tag"
 //   outline invalid or clipped -> skip "ball not fully in view"
 //   radius < min_probe_radius  -> skip "ball too small"
+//   ball image almost all white -> skip "ball saturated" (see kSaturatedCode)
+//   ball image almost all black -> skip "ball dark" (see kDarkCode): a cap on
+//                                 the ball, a hand, lights off; a map made from
+//                                 it would light the object uniformly white or
+//                                 black and replace the good one
 //   no maps yet                -> update (weight 1): anything beats no object
 //   camera not steady          -> skip "camera moving" (a moving frame may be
 //                                 blurred, and its pose lags the image)
@@ -76,9 +81,19 @@ struct MapUpdateSettings {
   double smoothing_new_weight = 0.5;
 };
 
-enum class MapSkipReason { kNone, kNoTag, kBallNotInView, kBallTooSmall, kCameraMoving, kImageUnchanged };
+enum class MapSkipReason {
+  kNone,
+  kNoTag,
+  kBallNotInView,
+  kBallTooSmall,
+  kBallSaturated,
+  kBallDark,
+  kCameraMoving,
+  kImageUnchanged
+};
 // The report's words: "no tag", "ball not fully in view", "ball too small",
-// "camera moving", "ball image unchanged"; "" for kNone.
+// "ball saturated", "ball dark", "camera moving", "ball image unchanged"; ""
+// for kNone.
 const char* toString(MapSkipReason reason);
 
 enum class MapUpdateCause { kNone, kFirst, kFreshRequested, kImageChanged, kMaxAge };
@@ -112,6 +127,35 @@ struct BallSignature {
 
 BallSignature sampleBallSignature(const LumaView& luma, glm::dvec2 center_px, double radius_px);
 
+// Unusable ball images, judged on the signature's cell means (8-bit luma
+// codes), from the format and the noise alone, not from any scene:
+// - A clipped pixel reads 255. Noise added before the clip (sensor noise,
+//   sigma codes) pulls a clipped cell's mean down to E[min(255, 255 + n)] =
+//   255 - sigma / sqrt(2 pi) = 255 - 0.40 sigma; 250 leaves 5 codes, i.e. it
+//   still calls a clipped cell clipped at sigma up to 12 codes (8x the
+//   simulator's 1.5, well above a usable camera's). A cell above 250 that is
+//   not clipped carries at most 5 codes (2%) of information before white.
+// - Black is the mirror case at code 0: E[max(0, n)] = 0.40 sigma, so <= 5
+//   codes holds to sigma 12 too. Code 5 is sRGB-linear 0.0015 of white, where
+//   one code step is a 20% change: no lighting can be read from it.
+// - 95% of the cells (the disc has ~110 of the 144): a real room image of the
+//   ball always has some structure, but a cap, a hand or a blown-out frame
+//   may leave a rim of a few cells (5% is ~5 cells) that still show something;
+//   such a frame is still useless. Below 95% the image holds enough
+//   directions that the map is worth more than the old one.
+inline constexpr double kSaturatedCode = 250.0;
+inline constexpr double kDarkCode = 5.0;
+inline constexpr double kUnusableCellFraction = 0.95;
+
+// Which share of the signature's cells (those holding pixels) is >= kSaturatedCode
+// and which is <= kDarkCode; both 0 for an empty signature.
+struct BallExposure {
+  double saturated_fraction = 0.0;
+  double dark_fraction = 0.0;
+  int cells = 0;
+};
+BallExposure measureBallExposure(const BallSignature& signature);
+
 // Mean |a - b| over the cells both hold, in codes; nullopt when none.
 std::optional<double> signatureDifference(const BallSignature& a, const BallSignature& b);
 
@@ -133,6 +177,8 @@ struct MapUpdateDecision {
   std::optional<double> radius_change_px;
   std::optional<double> rotation_change_deg;
   std::optional<double> image_change_code;  // against the reference (see class comment)
+  std::optional<double> saturated_fraction;  // of the ball's cells, when the ball was usable so far
+  std::optional<double> dark_fraction;
 };
 
 // One per kiosk. decide() assumes the caller applies an "update" answer.

@@ -9,7 +9,10 @@
 
 namespace probelight::ibl {
 
-// Camera-frame point (z > 0) to distorted pixel coordinates.
+// Camera-frame point (z > 0) to distorted pixel coordinates. A point with
+// z = 0 or non-finite coordinates gives a non-finite pixel (never a crash);
+// callers that can meet such points check std::isfinite (reflectedDirectionToPixel
+// and computeProbeOutline return empty / invalid). Zero would be a real pixel.
 glm::dvec2 projectToPixel(const CameraIntrinsics& camera, const glm::dvec3& point_cam);
 // Fixed-point steps pixelToCameraRay takes (OpenCV's undistortPoints scheme,
 // which defaults to 5). The error shrinks each step by roughly the slope of the

@@ -13,6 +13,10 @@ enum Face { kPosX = 0, kNegX = 1, kPosY = 2, kNegY = 3, kPosZ = 4, kNegZ = 5 };
 // the z = 1 plane: the solid angle of that rectangle seen from the origin.
 double cornerSolidAngle(double x, double y) { return std::atan2(x * y, std::sqrt(x * x + y * y + 1.0)); }
 
+bool isUsableDirection(const glm::dvec3& d) {
+  return std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z) && (d.x != 0.0 || d.y != 0.0 || d.z != 0.0);
+}
+
 glm::vec3 lerp(const glm::vec3& a, const glm::vec3& b, float f) { return a + (b - a) * f; }
 
 }  // namespace
@@ -34,6 +38,11 @@ glm::dvec3 cubeCoordToDirection(const CubeTexelCoord& coord) {
 }
 
 CubeTexelCoord directionToCubeCoord(const glm::dvec3& direction) {
+  // NaN, Inf or zero has no face: NaN fails every comparison below and would
+  // come out as face -X with s, t = NaN, which callers turn into texel indices
+  // (a NaN cast to int is undefined). A defined answer instead: the centre of
+  // face +X (CubeTexelCoord's defaults); samplers return 0 for such directions.
+  if (!isUsableDirection(direction)) return CubeTexelCoord{};
   const double ax = std::abs(direction.x);
   const double ay = std::abs(direction.y);
   const double az = std::abs(direction.z);
@@ -85,6 +94,7 @@ CubeMapRGB::CubeMapRGB(int size) : face_size(size) {
 }
 
 glm::vec3 CubeMapRGB::sampleNearest(const glm::dvec3& direction) const {
+  if (face_size <= 0 || !isUsableDirection(direction)) return glm::vec3(0.0f);
   const CubeTexelCoord c = directionToCubeCoord(direction);
   const int x = std::clamp(static_cast<int>(std::floor(c.s * face_size)), 0, face_size - 1);
   const int y = std::clamp(static_cast<int>(std::floor(c.t * face_size)), 0, face_size - 1);
@@ -92,6 +102,7 @@ glm::vec3 CubeMapRGB::sampleNearest(const glm::dvec3& direction) const {
 }
 
 glm::vec3 CubeMapRGB::sampleBilinear(const glm::dvec3& direction) const {
+  if (face_size <= 0 || !isUsableDirection(direction)) return glm::vec3(0.0f);
   const CubeTexelCoord c = directionToCubeCoord(direction);
   // GL puts texel centres at integer + 0.5, hence the half-texel shift.
   const double u = c.s * face_size - 0.5;

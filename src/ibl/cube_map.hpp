@@ -25,6 +25,7 @@ glm::dvec3 cubeCoordToDirection(const CubeTexelCoord& coord);
 // Direction (any length > 0) to the face and (s, t) that GL would sample.
 // Where two or three components tie in magnitude (face edges and corners) the
 // face is chosen as Mesa llvmpipe does: z first, then y, then x.
+// A non-finite or zero direction gives the default coord (face 0, s = t = 0.5).
 CubeTexelCoord directionToCubeCoord(const glm::dvec3& direction);
 // Centre of texel (x, y) of a face of size n: s = (x + 0.5) / n, t = (y + 0.5) / n.
 glm::dvec3 cubeTexelCenterDirection(int face, int x, int y, int face_size);
@@ -40,6 +41,7 @@ struct CubeMapRGB {
   explicit CubeMapRGB(int size = 0);
   glm::vec3& texel(int face, int x, int y) { return faces[face][static_cast<size_t>(y) * face_size + x]; }
   const glm::vec3& texel(int face, int x, int y) const { return faces[face][static_cast<size_t>(y) * face_size + x]; }
+  // Both lookups return 0 for a non-finite or zero direction (and an empty map).
   // Nearest-texel lookup, as GL_NEAREST does.
   glm::vec3 sampleNearest(const glm::dvec3& direction) const;
   // Bilinear lookup within the face GL picks, clamped to the face edge, as a

@@ -6,9 +6,20 @@
 
 namespace probelight::ibl {
 
+namespace {
+
+bool isFinite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+}  // namespace
+
 std::optional<glm::dvec2> reflectedDirectionToPixel(const MirrorBallView& view, const glm::dvec3& reflected_w,
                                                     int iterations) {
   const glm::dvec3 camera_center_w = view.pose.cameraCenterWorld();
+  // NaN fails every test below (a length < threshold, a dot <= 0), so a NaN
+  // direction or pose would come out as a NaN pixel: no pixel instead.
+  if (!isFinite(reflected_w) || glm::length(reflected_w) == 0.0 || !isFinite(camera_center_w) ||
+      !isFinite(view.center_w) || !std::isfinite(view.radius_m))
+    return std::nullopt;
   const glm::dvec3 r = glm::normalize(reflected_w);
   // The seed treats the camera as infinitely far along O - C; each step then
   // re-aims the view vector from the current surface point, which shrinks the
@@ -27,8 +38,11 @@ std::optional<glm::dvec2> reflectedDirectionToPixel(const MirrorBallView& view, 
   // On a convex ball a point is visible exactly when its normal faces the eye.
   if (glm::dot(normal, to_camera) <= 0.0) return std::nullopt;
   const glm::dvec3 surface_cam = view.pose.toCamera(surface_w);
-  if (surface_cam.z <= 0.0) return std::nullopt;
-  return projectToPixel(view.camera, surface_cam);
+  if (!(surface_cam.z > 0.0)) return std::nullopt;
+  const glm::dvec2 pixel = projectToPixel(view.camera, surface_cam);
+  // Non-finite intrinsics (or an overflow) still give no pixel, not a NaN one.
+  if (!std::isfinite(pixel.x) || !std::isfinite(pixel.y)) return std::nullopt;
+  return pixel;
 }
 
 std::optional<glm::dvec3> pixelToReflectedDirection(const MirrorBallView& view, const glm::dvec2& pixel) {
@@ -40,11 +54,14 @@ std::optional<glm::dvec3> pixelToReflectedDirection(const MirrorBallView& view, 
   const double half_b = glm::dot(ray_w, centre_to_origin);
   const double c = glm::dot(centre_to_origin, centre_to_origin) - view.radius_m * view.radius_m;
   const double discriminant = half_b * half_b - c;
-  if (discriminant < 0.0) return std::nullopt;
+  // Written so that NaN (from a NaN pixel, pose or calibration) fails them too.
+  if (!(discriminant >= 0.0)) return std::nullopt;
   const double t_nearest = -half_b - std::sqrt(discriminant);
-  if (t_nearest <= 0.0) return std::nullopt;  // ball behind the camera, or camera inside it
+  if (!(t_nearest > 0.0)) return std::nullopt;  // ball behind the camera, or camera inside it
   const glm::dvec3 normal = (origin_w + t_nearest * ray_w - view.center_w) / view.radius_m;
-  return glm::normalize(ray_w - 2.0 * glm::dot(ray_w, normal) * normal);
+  const glm::dvec3 reflected = glm::normalize(ray_w - 2.0 * glm::dot(ray_w, normal) * normal);
+  if (!isFinite(reflected)) return std::nullopt;
+  return reflected;
 }
 
 glm::dvec2 orthographicSphereMapPixel(const MirrorBallView& view, const glm::dvec3& reflected_w) {

@@ -34,12 +34,15 @@ struct MirrorBallView {
 //   repeat `iterations` times: e = normalize(O - (C + radius n)); n = normalize(e + r)
 //   P = C + radius n (from the final n); pixel = projectToPixel(P in camera)
 // Empty when any |e + r| < kBlindSpotLength, when the final P faces away from
-// the camera (dot(n, normalize(O - P)) <= 0) or when P is not in front of it.
+// the camera (dot(n, normalize(O - P)) <= 0) or when P is not in front of it,
+// and empty (never a NaN pixel) for a zero or non-finite direction, view or
+// resulting pixel.
 std::optional<glm::dvec2> reflectedDirectionToPixel(const MirrorBallView& view, const glm::dvec3& reflected_w,
                                                     int iterations = 8);
 // World direction (unit) in which the camera ray through `pixel` leaves the
 // ball after reflection off its nearest hit. Empty when the ray misses the
-// ball. `pixel` is in OpenCV pixel coordinates, as projectToPixel returns.
+// ball, and for non-finite input. `pixel` is in OpenCV pixel coordinates, as
+// projectToPixel returns.
 std::optional<glm::dvec3> pixelToReflectedDirection(const MirrorBallView& view, const glm::dvec2& pixel);
 // Seed A's approximation, kept only to measure how wrong it is: ball normal
 // n = normalize(r + v) with v = the negated camera z axis in W (fixed along

@@ -12,7 +12,11 @@ ProbeOutline computeProbeOutline(const MirrorBallView& view, int samples) {
   const glm::dvec3 center_cam = view.pose.toCamera(view.center_w);
   const double distance = glm::length(center_cam);
   const double radius = view.radius_m;
-  if (samples < 8 || radius <= 0.0 || distance <= radius * 1.0001) return outline;
+  // Written so that NaN or Inf (a degenerate pose, a bad rig) fails too: an
+  // outline with a NaN centre must not come out valid.
+  if (samples < 8 || !(radius > 0.0) || !std::isfinite(radius) || !std::isfinite(distance) ||
+      !(distance > radius * 1.0001))
+    return outline;
 
   // Tangency circle: centre on the line of sight at distance (d^2 - r^2)/d,
   // radius r * sqrt(d^2 - r^2) / d.
@@ -27,8 +31,11 @@ ProbeOutline computeProbeOutline(const MirrorBallView& view, int samples) {
   for (int i = 0; i < samples; ++i) {
     const double angle = 2.0 * M_PI * i / samples;
     const glm::dvec3 p = axis * along + circle_radius * (std::cos(angle) * u + std::sin(angle) * v);
-    if (p.z <= 1e-9) return outline;  // part of the outline is behind the camera
+    if (!(p.z > 1e-9)) return outline;  // part of the outline is behind the camera
     points[static_cast<size_t>(i)] = projectToPixel(view.camera, p);
+    // Non-finite intrinsics give non-finite points: no outline.
+    if (!std::isfinite(points[static_cast<size_t>(i)].x) || !std::isfinite(points[static_cast<size_t>(i)].y))
+      return outline;
   }
 
   double twice_area = 0.0;
@@ -43,7 +50,7 @@ ProbeOutline computeProbeOutline(const MirrorBallView& view, int samples) {
     outline.min_px = glm::min(outline.min_px, a);
     outline.max_px = glm::max(outline.max_px, a);
   }
-  if (std::abs(twice_area) < 1e-12) return outline;
+  if (!(std::abs(twice_area) >= 1e-12) || !std::isfinite(twice_area)) return outline;
   outline.center_px = centroid_sum / (3.0 * twice_area);
   outline.radius_px = std::sqrt(std::abs(twice_area) * 0.5 / M_PI);
   outline.fully_in_image = outline.min_px.x >= 0.0 && outline.min_px.y >= 0.0 &&

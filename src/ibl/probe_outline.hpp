@@ -13,7 +13,7 @@
 namespace probelight::ibl {
 
 struct ProbeOutline {
-  bool valid = false;             // false when the camera is inside or behind the ball
+  bool valid = false;             // false when the camera is inside or behind the ball, or on non-finite input
   glm::dvec2 center_px{0.0};      // area centroid of the outline
   double radius_px = 0.0;         // radius of the circle with the outline's area
   glm::dvec2 min_px{0.0};         // bounding box of the outline

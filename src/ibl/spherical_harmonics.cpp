@@ -126,6 +126,9 @@ SH9RGB projectToSH9(const CubeMapRGB& radiance, const std::vector<float>* validi
   SH9RGB sh;
   const int n = radiance.face_size;
   if (n <= 0) return sh;
+  // A validity of another layout cannot be matched to the texels (and would
+  // be read out of bounds): nothing is known, so zero coefficients.
+  if (validity != nullptr && validity->size() != static_cast<size_t>(kCubeFaceCount) * n * n) return sh;
   const std::shared_ptr<const ProjectionTable> table = projectionTable(n);
   const size_t texels_per_face = static_cast<size_t>(n) * static_cast<size_t>(n);
   std::array<glm::dvec3, kSH9Count> b{};
@@ -142,14 +145,18 @@ SH9RGB projectToSH9(const CubeMapRGB& radiance, const std::vector<float>* validi
       if (validity != nullptr) {
         const double v = (*validity)[i];
         weight = v > 0.0 ? std::min(v, 1.0) : 0.0;  // NaN counts as unseen
-        if (weight < 1.0) {
-          const double missing = 1.0 - weight;
-          seen_solid_angle -= missing * table->solid_angles[i];
-          for (int k = 0; k < kSH9Count; ++k) {
-            for (int j = 0; j <= k; ++j) gram[k][j] -= missing * table->weighted_basis[i][k] * table->basis[i][j];
-          }
-          if (weight == 0.0) continue;
+      }
+      // A non-finite texel (NaN, Inf) is unknown like the blind spot: left
+      // out, so one bad texel cannot turn all nine coefficients into NaN.
+      const glm::vec3& texel = texels[index];
+      if (!std::isfinite(texel.r) || !std::isfinite(texel.g) || !std::isfinite(texel.b)) weight = 0.0;
+      if (weight < 1.0) {
+        const double missing = 1.0 - weight;
+        seen_solid_angle -= missing * table->solid_angles[i];
+        for (int k = 0; k < kSH9Count; ++k) {
+          for (int j = 0; j <= k; ++j) gram[k][j] -= missing * table->weighted_basis[i][k] * table->basis[i][j];
         }
+        if (weight == 0.0) continue;
       }
       const glm::dvec3 value = glm::dvec3(texels[index]) * weight;
       for (int k = 0; k < kSH9Count; ++k) b[k] += table->weighted_basis[i][k] * value;
@@ -182,6 +189,10 @@ SH9RGB projectToSH9(const CubeMapRGB& radiance, const std::vector<float>* validi
 }
 
 glm::dvec3 irradianceFromSH9(const SH9RGB& sh, const glm::dvec3& normal) {
+  // A NaN or zero normal has no irradiance to speak of: 0, not NaN.
+  if (!std::isfinite(normal.x) || !std::isfinite(normal.y) || !std::isfinite(normal.z) ||
+      (normal.x == 0.0 && normal.y == 0.0 && normal.z == 0.0))
+    return glm::dvec3(0.0);
   const glm::dvec3 n = glm::normalize(normal);
   const auto& L = sh.coefficients;
   const double x = n.x;

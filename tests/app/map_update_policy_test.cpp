@@ -3,7 +3,9 @@
 // jitters, as pose noise does) independently of the image.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -270,6 +272,139 @@ TEST(MapUpdatePolicy, FreshMapRequestUpdatesUnsmoothedOnTheNextSteadyFrame) {
   // Served once: the next unchanged frame is skipped again.
   EXPECT_EQ(policy.decide(frameInput(drawBall(moved, kRadius, rng), moved, kRadius)).skip,
             MapSkipReason::kImageUnchanged);
+}
+
+// A ball of one level (255: blown out; 0: covered or black) on the grey
+// floor, with Gaussian noise of `sigma` codes added before the 8-bit clip,
+// which is what pulls a clipped area's pixels below 255 (or above 0): the
+// conservative model (a real sensor clips after its noise and reads 255).
+std::vector<std::uint8_t> drawUniformBall(glm::dvec2 center, double radius, double level, double sigma,
+                                          std::mt19937& rng) {
+  std::normal_distribution<double> noise(0.0, sigma);
+  std::vector<std::uint8_t> luma(kWidth * kHeight);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const double value = glm::length(glm::dvec2(x, y) - center) <= radius ? level : 90.0;
+      luma[y * kWidth + x] = static_cast<std::uint8_t>(std::clamp(std::lround(value + noise(rng)), 0L, 255L));
+    }
+  return luma;
+}
+
+// A blown-out or covered ball is skipped with its own reason, and the maps
+// and their reference survive: the next normal frame, showing what the maps
+// hold, is "unchanged", not an update back from white or black.
+TEST(MapUpdatePolicy, SaturatedOrDarkBallIsSkippedAndTheMapsKept) {
+  for (const double level : {255.0, 0.0}) {
+    const MapSkipReason expected = level > 0.0 ? MapSkipReason::kBallSaturated : MapSkipReason::kBallDark;
+    MapUpdatePolicy policy;
+    std::mt19937 rng(21);
+    ASSERT_TRUE(policy.decide(frameInput(drawBall(kCenter, kRadius, rng), kCenter, kRadius)).update);
+    for (int frame = 0; frame < 5; ++frame) {
+      // sigma 6 codes (4x the simulator's) on the default ball's ~20-pixel cells.
+      const MapUpdateDecision decision =
+          policy.decide(frameInput(drawUniformBall(kCenter, kRadius, level, 6.0, rng), kCenter, kRadius));
+      EXPECT_FALSE(decision.update) << level;
+      EXPECT_EQ(decision.skip, expected) << level;
+      EXPECT_STREQ(toString(decision.skip), level > 0.0 ? "ball saturated" : "ball dark");
+      ASSERT_TRUE(decision.saturated_fraction && decision.dark_fraction);
+      EXPECT_GE(level > 0.0 ? *decision.saturated_fraction : *decision.dark_fraction, kUnusableCellFraction);
+      EXPECT_TRUE(policy.haveMaps());
+      EXPECT_EQ(policy.framesSinceUpdate(), frame + 1) << "the maps were not replaced";
+    }
+    // Back to the view the maps hold: unchanged, so the reference survived.
+    const MapUpdateDecision back = policy.decide(frameInput(drawBall(kCenter, kRadius, rng), kCenter, kRadius));
+    EXPECT_EQ(back.skip, MapSkipReason::kImageUnchanged) << level;
+  }
+}
+
+// Before any map exists, a white or black ball still gives none: the object
+// stays hidden rather than lit uniformly white or black; the first usable
+// frame then makes the first map.
+TEST(MapUpdatePolicy, UnusableBallNeverMakesTheFirstMap) {
+  MapUpdatePolicy policy;
+  std::mt19937 rng(22);
+  // The smallest ball the default settings accept, one-pixel cells, at the
+  // simulator's noise: a clipped pixel reads >= 250 with probability 99.95%
+  // (5 codes = 3.3 sigma), so well over 95% of cells count.
+  const double radius = MapUpdateSettings{}.min_probe_radius_px;
+  EXPECT_EQ(policy.decide(frameInput(drawUniformBall(kCenter, radius, 255.0, kNoiseSigma, rng), kCenter, radius)).skip,
+            MapSkipReason::kBallSaturated);
+  EXPECT_EQ(policy.decide(frameInput(drawUniformBall(kCenter, radius, 0.0, kNoiseSigma, rng), kCenter, radius)).skip,
+            MapSkipReason::kBallDark);
+  EXPECT_FALSE(policy.haveMaps());
+  const MapUpdateDecision first = policy.decide(frameInput(drawBall(kCenter, radius, rng), kCenter, radius));
+  EXPECT_TRUE(first.update);
+  EXPECT_EQ(first.cause, MapUpdateCause::kFirst);
+}
+
+// The thresholds on hand-made signatures: >= 95% of the cells holding pixels,
+// cells >= 250 (saturated) or <= 5 (dark); empty cells do not count.
+TEST(MapUpdatePolicy, ExposureThresholdsAtTheirEdges) {
+  auto signature = [](int cells, int at_level, float level, float rest) {
+    BallSignature s;
+    s.mean.assign(BallSignature::kCells * BallSignature::kCells, 0.0f);
+    s.count.assign(s.mean.size(), 0);  // the rest: off the disc
+    for (int i = 0; i < cells; ++i) {
+      s.count[i] = 3;
+      s.mean[i] = i < at_level ? level : rest;
+    }
+    return s;
+  };
+  EXPECT_DOUBLE_EQ(measureBallExposure(signature(100, 95, 250.0f, 120.0f)).saturated_fraction, 0.95);
+  EXPECT_DOUBLE_EQ(measureBallExposure(signature(100, 95, 249.9f, 120.0f)).saturated_fraction, 0.0);
+  EXPECT_DOUBLE_EQ(measureBallExposure(signature(100, 94, 255.0f, 120.0f)).saturated_fraction, 0.94);
+  EXPECT_DOUBLE_EQ(measureBallExposure(signature(100, 95, 5.0f, 120.0f)).dark_fraction, 0.95);
+  EXPECT_DOUBLE_EQ(measureBallExposure(signature(100, 95, 5.1f, 120.0f)).dark_fraction, 0.0);
+  EXPECT_EQ(measureBallExposure(signature(100, 0, 0.0f, 120.0f)).cells, 100);
+  EXPECT_EQ(measureBallExposure(BallSignature{}).cells, 0);
+}
+
+// What must not be called unusable: a bright ball with a real structure
+// (a dark window across 1/4 of it), and a dark room with one lamp. Both
+// update (image changed) instead.
+TEST(MapUpdatePolicy, MostlyBrightOrMostlyDarkBallWithStructureIsUsed) {
+  for (const double level : {255.0, 0.0}) {
+    MapUpdatePolicy policy;
+    std::mt19937 rng(23);
+    ASSERT_TRUE(policy.decide(frameInput(drawBall(kCenter, kRadius, rng), kCenter, kRadius)).update);
+    auto luma = drawUniformBall(kCenter, kRadius, level, kNoiseSigma, rng);
+    // A quarter of the disc (x < centre - 0.35 r holds ~1/4 of its area) at
+    // mid-grey: well over 5% of the cells.
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x)
+        if (glm::length(glm::dvec2(x, y) - kCenter) <= kRadius && x < kCenter.x - 0.35 * kRadius)
+          luma[y * kWidth + x] = 120;
+    const MapUpdateDecision decision = policy.decide(frameInput(luma, kCenter, kRadius));
+    EXPECT_TRUE(decision.update) << level << " " << toString(decision.skip);
+    EXPECT_EQ(decision.cause, MapUpdateCause::kImageChanged);
+  }
+}
+
+// A degenerate pose (NaN) gives a NaN outline or rotation: skipped as "ball
+// not fully in view", no undefined sampling, and the next good frame's
+// steadiness is not judged against it.
+TEST(MapUpdatePolicy, NonFiniteOutlineOrRotationIsSkipped) {
+  MapUpdatePolicy policy;
+  std::mt19937 rng(24);
+  const auto luma = drawBall(kCenter, kRadius, rng);
+  ASSERT_TRUE(policy.decide(frameInput(luma, kCenter, kRadius)).update);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (int field = 0; field < 4; ++field) {
+    MapFrameInput input = frameInput(luma, kCenter, kRadius);
+    if (field == 0) input.outline.center_px.x = nan;
+    if (field == 1) input.outline.radius_px = inf;
+    if (field == 2) input.outline.center_px.y = -inf;
+    if (field == 3) input.rotation_cam_from_world[2][1] = nan;
+    const MapUpdateDecision decision = policy.decide(input);
+    EXPECT_FALSE(decision.update) << field;
+    EXPECT_EQ(decision.skip, MapSkipReason::kBallNotInView) << field;
+    EXPECT_FALSE(decision.center_shift_px.has_value()) << field;
+  }
+  EXPECT_TRUE(policy.haveMaps());
+  // The signature of a non-finite outline holds no pixel (and reads none).
+  const BallSignature empty = sampleBallSignature(LumaView{luma.data(), kWidth, kHeight, kWidth}, {nan, 3.0}, 10.0);
+  EXPECT_EQ(measureBallExposure(empty).cells, 0);
 }
 
 }  // namespace
