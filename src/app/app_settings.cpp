@@ -14,6 +14,8 @@ AppSettings loadAppSettings(const std::string& path) {
   ConfigReader maps = file.section("environment_maps");
   pipeline::EnvironmentMapSettings& stages = settings.maps.stages;
   stages.reflection_face_size = maps.readInt("face_size", stages.reflection_face_size, Range::closed(8, 1024));
+  if ((stages.reflection_face_size & (stages.reflection_face_size - 1)) != 0)
+    maps.fail("face_size", std::to_string(stages.reflection_face_size) + " is not a power of two");
   stages.prefilter_face_size =
       maps.readInt("prefilter_face_size", stages.prefilter_face_size, Range::closed(1, 1024));
   const int factor = stages.reflection_face_size / stages.prefilter_face_size;
@@ -26,6 +28,19 @@ AppSettings loadAppSettings(const std::string& path) {
   stages.blur_half_taps = maps.readInt("half_taps", stages.blur_half_taps, Range::closed(1, 32));
   stages.pole_direct_deg = maps.readDouble("pole_direct_deg", stages.pole_direct_deg, Range::closed(0.0, 90.0));
   stages.normal_iterations = maps.readInt("normal_iterations", stages.normal_iterations, Range::closed(1, 16));
+  // Powers of two: the passes divide sizes into one another (prefilter,
+  // glossy levels), and GLES2 limits non-power-of-two textures.
+  for (const auto& [field, size] : {std::pair{"prefilter_face_size", stages.prefilter_face_size},
+                                    {"intermediate_face_size", stages.intermediate_face_size},
+                                    {"diffuse_face_size", stages.diffuse_face_size}})
+    if ((size & (size - 1)) != 0) maps.fail(field, std::to_string(size) + " is not a power of two");
+  const std::string transfer = maps.readString("camera_transfer", "srgb", {"srgb", "gamma", "linear"});
+  stages.camera_transfer.curve = transfer == "gamma"    ? ibl::CameraTransfer::Curve::kGamma
+                                 : transfer == "linear" ? ibl::CameraTransfer::Curve::kLinear
+                                                        : ibl::CameraTransfer::Curve::kSrgb;
+  stages.camera_transfer.gamma =
+      maps.readDouble("camera_gamma", stages.camera_transfer.gamma, Range::openClosed(0.0, 5.0));
+  stages.glossy_levels = maps.readInt("glossy_levels", stages.glossy_levels, Range::closed(0, 2));
   const std::string method = maps.readString("diffuse_method", "cosine", {"cosine", "sh9"});
   settings.maps.diffuse_method = method == "sh9" ? DiffuseMethod::kSH9 : DiffuseMethod::kCosinePasses;
   settings.maps.force_8bit = maps.readBool("force_8bit", settings.maps.force_8bit);
@@ -49,6 +64,7 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.object.k_specular = object.readDouble("k_specular", settings.object.k_specular, Range::closed(0.0, 10.0));
   settings.object.shininess = object.readDouble("shininess", settings.object.shininess, Range::closed(1.0, 4096.0));
   settings.object.k_reflect = object.readDouble("k_reflect", settings.object.k_reflect, Range::closed(0.0, 1.0));
+  settings.object.glossiness = object.readDouble("glossiness", settings.object.glossiness, Range::closed(0.0, 1.0));
   object.rejectUnknownFields();
 
   ConfigReader recalibration = file.section("recalibration");

@@ -38,6 +38,9 @@ struct ObjectConfig {
   double k_specular = 0.25;
   double shininess = 48.0;
   double k_reflect = 0.08;
+  // 1: the reflection term is a mirror; 0: it reads the diffuse map; between,
+  // it blends the glossy levels (src/ibl/surface_shading.hpp).
+  double glossiness = 1.0;
 };
 
 struct SimConfig {

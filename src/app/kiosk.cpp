@@ -237,10 +237,7 @@ class Kiosk {
     if (!button_ || !button_->start(error)) return fail(2, error);
     if (!source_->start(error)) return fail(options_.source == "images" ? 2 : 1, error);
 
-    material_.albedo = glm::vec3(settings.object.albedo);
-    material_.k_specular = static_cast<float>(settings.object.k_specular);
-    material_.shininess = static_cast<float>(settings.object.shininess);
-    material_.k_reflect = static_cast<float>(settings.object.k_reflect);
+    material_ = objectMaterial(settings);
     object_center_w_ = glm::dvec3(settings.object.position_w, settings.object.radius_m);
     machine_ = LightingStateMachine(settings.recalibration);
     map_policy_ = MapUpdatePolicy(settings.map_updates);
@@ -464,6 +461,13 @@ class Kiosk {
     } else {
       StageTimer timer(report_, diffuseStageName());
       if (!maps_.updateDiffuse(error, new_weight)) return fail(1, error);
+      gpuDone();
+    }
+    // Glossy levels only when the object's material sits between them (a
+    // mirror or a matte object never reads them).
+    if (ibl::needsGlossy(material_)) {
+      StageTimer timer(report_, "glossy");
+      if (!maps_.updateGlossy(error)) return fail(1, error);
       gpuDone();
     }
     have_maps_ = true;

@@ -1,5 +1,7 @@
 #include "app/stage_settings.hpp"
 
+#include <algorithm>
+
 namespace probelight {
 
 tracking::TagDetectorSettings tagDetectorSettings(const AppSettings& settings, const RigGeometry& rig) {
@@ -13,7 +15,22 @@ tracking::TagDetectorSettings tagDetectorSettings(const AppSettings& settings, c
 }
 
 pipeline::EnvironmentMapSettings environmentMapSettings(const AppSettings& settings) {
-  return settings.maps.stages;
+  pipeline::EnvironmentMapSettings stages = settings.maps.stages;
+  if (!ibl::needsGlossy(objectMaterial(settings))) stages.glossy_levels = 0;
+  // A glossy level is never finer than the reflection map it filters; at a
+  // smaller face_size it takes the map's own size (which divides it).
+  for (int& size : stages.glossy_face_size) size = std::min(size, stages.reflection_face_size);
+  return stages;
+}
+
+ibl::SurfaceMaterial objectMaterial(const AppSettings& settings) {
+  ibl::SurfaceMaterial material;
+  material.albedo = glm::vec3(settings.object.albedo);
+  material.k_specular = static_cast<float>(settings.object.k_specular);
+  material.shininess = static_cast<float>(settings.object.shininess);
+  material.k_reflect = static_cast<float>(settings.object.k_reflect);
+  material.glossiness = static_cast<float>(settings.object.glossiness);
+  return material;
 }
 
 }  // namespace probelight

@@ -6,6 +6,7 @@
 
 #include "app/app_settings.hpp"
 #include "core/types.hpp"
+#include "ibl/surface_shading.hpp"
 #include "pipeline/environment_maps.hpp"
 #include "tracking/tag_detector.hpp"
 
@@ -17,6 +18,10 @@ tracking::TagDetectorSettings tagDetectorSettings(const AppSettings& settings, c
 
 // The `environment_maps` section as the GPU stages take it (force_8bit is not
 // here: it changes the capabilities the stages are given, not their settings).
+// Glossy maps are allocated only when the object's material reads them.
 pipeline::EnvironmentMapSettings environmentMapSettings(const AppSettings& settings);
+
+// The `object` section as the shading takes it.
+ibl::SurfaceMaterial objectMaterial(const AppSettings& settings);
 
 }  // namespace probelight

@@ -1,7 +1,24 @@
 // CPU reference of stage 4: the seeds' shading equation (seed A),
 //   c = A_l * A_m + K_d * D_map(n) * albedo + K_s * S_l * max(n.h, 0)^shininess + K_r * R_map(reflect(-v, n)),
 // in linear light, with Blinn-Phong's half vector h = normalize(l + v).
+//
+// Glossiness (seed C: materials blend between the two nearest maps): the
+// reflection term K_r * R reads a ladder of maps from sharp to blurred,
+//   rung 0             the mirror map at reflect(-v, n),
+//   rungs 1..L         the glossy maps (cos^128, cos^16 lobes by default;
+//                      src/ibl/glossy_maps.hpp) at reflect(-v, n),
+//   rung L + 1         the diffuse map at n (its clamped-cosine lobe about
+//                      the normal: E(n) / pi, the same units of mean radiance),
+// at position p = (1 - glossiness) (L + 1), linearly between rungs floor(p)
+// and floor(p) + 1. Glossiness 1 is exactly today's mirror term (the
+// default, so nothing changes for existing materials) and 0 exactly K_r
+// times the diffuse map's sample; p is exact at both ends in floats, and
+// a rung with weight 0 is not read. The rungs are spaced evenly, and the
+// lobe widths step geometrically (sigma 0, 0.088, 0.25, ~0.6 rad), so
+// glossiness is roughly linear in log(width).
 #pragma once
+
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -16,7 +33,21 @@ struct SurfaceMaterial {
   float k_specular = 0.0f;             // K_s
   float shininess = 32.0f;             // n
   float k_reflect = 0.0f;              // K_r
+  float glossiness = 1.0f;             // [0, 1]: 1 mirror, 0 the diffuse lobe; see above
 };
+
+// Whether this material reads a glossy map: K_r > 0 and 0 < glossiness < 1.
+// The app makes the glossy maps (EnvironmentMaps::updateGlossy) only when
+// some object needs them; otherwise the ladder has no glossy rungs to read.
+bool needsGlossy(const SurfaceMaterial& material);
+
+// The two rungs and the weight of the upper one for `glossiness` with
+// `glossy_levels` glossy maps: R = mix(rung(lower), rung(lower + 1), toward_next).
+struct ReflectionLadderBlend {
+  int lower = 0;
+  float toward_next = 0.0f;
+};
+ReflectionLadderBlend reflectionLadderBlend(float glossiness, int glossy_levels);
 
 struct SceneLighting {
   glm::vec3 ambient_rgb{0.0f};                    // A_l
@@ -27,5 +58,9 @@ struct SceneLighting {
 // normal_w and to_eye_w are unit vectors in W. Maps are sampled bilinearly.
 glm::vec3 shadeSurface(const glm::vec3& normal_w, const glm::vec3& to_eye_w, const CubeMapRGB& diffuse_map,
                        const CubeMapRGB& reflection_map, const SurfaceMaterial& material, const SceneLighting& lighting);
+// The same with glossy maps (sharpest first; none: the ladder is mirror, diffuse).
+glm::vec3 shadeSurface(const glm::vec3& normal_w, const glm::vec3& to_eye_w, const CubeMapRGB& diffuse_map,
+                       const CubeMapRGB& reflection_map, const std::vector<const CubeMapRGB*>& glossy_maps,
+                       const SurfaceMaterial& material, const SceneLighting& lighting);
 
 }  // namespace probelight::ibl

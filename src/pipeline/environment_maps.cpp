@@ -113,6 +113,18 @@ ibl::CosineIrradianceSettings cosineIrradianceSettings(const EnvironmentMapSetti
   return cosine;
 }
 
+ibl::GlossyLevelSettings glossyLevelSettings(const EnvironmentMapSettings& settings, int level) {
+  const auto i = static_cast<size_t>(level);
+  ibl::GlossyLevelSettings glossy;
+  glossy.exponent = settings.glossy_exponent[i];
+  glossy.prefilter_face_size = settings.glossy_face_size[i];
+  glossy.intermediate_face_size = settings.glossy_intermediate_face_size[i];
+  glossy.output_face_size = settings.glossy_face_size[i];
+  glossy.half_taps = settings.glossy_half_taps;
+  glossy.pole_direct_deg = settings.glossy_pole_direct_deg;
+  return glossy;
+}
+
 std::string cubeStorageDefines(CubeStorage storage) {
   return storage == CubeStorage::kSrgb8 ? "#define CUBE_STORAGE_SRGB8 1\n" : "";
 }
@@ -141,6 +153,24 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
       settings.blur_half_taps > 32 || !(settings.pole_direct_deg >= 0.0 && settings.pole_direct_deg <= 90.0)) {
     error = "EnvironmentMaps: normal_iterations must be 0..16, blur_half_taps 0..32 and pole_direct_deg 0..90";
     return false;
+  }
+  if (settings.glossy_levels < 0 || settings.glossy_levels > 2 || settings.glossy_half_taps < 1 ||
+      settings.glossy_half_taps > 32 || !(settings.glossy_pole_direct_deg >= 0.0 && settings.glossy_pole_direct_deg <= 90.0)) {
+    error = "EnvironmentMaps: glossy_levels must be 0..2, glossy_half_taps 1..32 and glossy_pole_direct_deg 0..90";
+    return false;
+  }
+  for (int level = 0; level < settings.glossy_levels; ++level) {
+    const auto i = static_cast<size_t>(level);
+    const int size = settings.glossy_face_size[i];
+    const int intermediate = settings.glossy_intermediate_face_size[i];
+    if (size < 2 || intermediate < 2 || intermediate > capabilities.max_cube_map_size_px ||
+        settings.reflection_face_size % size != 0 || settings.reflection_face_size / size > 8 ||
+        !(settings.glossy_exponent[i] >= 1.0)) {
+      error = "EnvironmentMaps: glossy level " + std::to_string(level) + ": glossy_face_size " + std::to_string(size) +
+              " must divide reflection_face_size by a factor of 1..8, glossy_intermediate_face_size must be in [2, " +
+              std::to_string(capabilities.max_cube_map_size_px) + "] and glossy_exponent >= 1";
+      return false;
+    }
   }
   framebuffer_ = gles::Framebuffer::create();
   if (!quad_.init(error)) return false;
@@ -171,9 +201,21 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
   }
 
   const std::string storage_defines = cubeStorageDefines(storage_);
+  std::string transfer_define;
+  if (settings.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma) {
+    if (!(settings.camera_transfer.gamma > 0.0 && settings.camera_transfer.gamma <= 5.0)) {
+      error = "camera transfer gamma must be in (0, 5]";
+      return false;
+    }
+    transfer_define = "#define CAMERA_TRANSFER_GAMMA\n";
+  } else if (settings.camera_transfer.curve == ibl::CameraTransfer::Curve::kLinear) {
+    transfer_define = "#define CAMERA_TRANSFER_LINEAR\n";
+  }
   auto probe_program = gles::Program::fromEmbedded(
       "cube_face.vert", "probe_to_cube.frag",
-      storage_defines + "#define NORMAL_ITERATIONS " + std::to_string(settings.normal_iterations) + "\n", error);
+      storage_defines + transfer_define + "#define NORMAL_ITERATIONS " + std::to_string(settings.normal_iterations) +
+          "\n",
+      error);
   if (!probe_program) return false;
   probe_program_ = std::move(*probe_program);
   const std::string cosine_defines = storage_defines + "#define HALF_TAPS " +
@@ -196,6 +238,32 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
   if (!allocate(diffuse_, settings.diffuse_face_size, error)) return false;
   if (!allocate(diffuse_spare_, settings.diffuse_face_size, error)) return false;
   diffuse_written_ = false;
+
+  if (settings.glossy_levels > 0) {
+    const std::string glossy_defines = storage_defines + "#define HALF_TAPS " + std::to_string(settings.glossy_half_taps) + "\n";
+    for (auto [program, pass] : {std::pair{&glossy_east_program_, "EAST_PASS"}, std::pair{&glossy_north_program_, "NORTH_PASS"}}) {
+      auto compiled = gles::Program::fromEmbedded("cube_face.vert", "glossy_lobe.frag",
+                                                  glossy_defines + "#define " + pass + " 1\n", error);
+      if (!compiled) return false;
+      *program = std::move(*compiled);
+    }
+  }
+  for (int level = 0; level < settings.glossy_levels; ++level) {
+    GlossyLevel& glossy = glossy_[static_cast<size_t>(level)];
+    const int size = settings.glossy_face_size[static_cast<size_t>(level)];
+    auto prefilter = gles::Program::fromEmbedded(
+        "cube_face.vert", "cosine_irradiance.frag",
+        storage_defines + "#define PREFILTER_FACTOR " + std::to_string(settings.reflection_face_size / size) +
+            "\n#define PREFILTER_PASS 1\n",
+        error);
+    if (!prefilter) return false;
+    glossy.prefilter_program = std::move(*prefilter);
+    if (!allocate(glossy.prefiltered, size, error)) return false;
+    if (!allocate(glossy.intermediate, settings.glossy_intermediate_face_size[static_cast<size_t>(level)], error))
+      return false;
+    if (!allocate(glossy.map, size, error)) return false;
+  }
+  glossy_written_ = false;
   return gles::checkGl("EnvironmentMaps::init", error);
 }
 
@@ -267,6 +335,7 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
   glUniform2f(probe_program_.uniform("u_center_texcoord"), static_cast<float>(center_texcoord.x),
               static_cast<float>(center_texcoord.y));
   glUniform1f(probe_program_.uniform("u_inverse_reflectance"), static_cast<float>(1.0 / probe_reflectance));
+  glUniform1f(probe_program_.uniform("u_camera_gamma"), static_cast<float>(settings_.camera_transfer.gamma));
   glUniform1f(probe_program_.uniform("u_storage_scale"), storage_scale);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, camera_frame.texture());
@@ -428,6 +497,47 @@ bool EnvironmentMaps::updateDiffuse(std::string& error, float new_weight) {
   return true;
 }
 
+bool EnvironmentMaps::updateGlossy(std::string& error) {
+  // Weighted means of the reflection map's values, as in updateDiffuse: its
+  // scale holds every map below.
+  const float scale = reflection_.linear_scale;
+  for (int level = 0; level < settings_.glossy_levels; ++level) {
+    GlossyLevel& glossy = glossy_[static_cast<size_t>(level)];
+    const ibl::GlossyLevelSettings lobe = glossyLevelSettings(settings_, level);
+    if (!cosinePass(glossy.prefilter_program, reflection_, glossy.prefiltered, scale, "EnvironmentMaps glossy prefilter",
+                    error))
+      return false;
+    const float step = static_cast<float>(ibl::glossyTapAngleRad(lobe.exponent, lobe.half_taps, 1));
+    for (const gles::Program* program : {&glossy_east_program_, &glossy_north_program_}) {
+      program->use();
+      glUniform1f(program->uniform("u_tap_step_rad"), step);
+      glUniform1f(program->uniform("u_east_power"), static_cast<float>(lobe.exponent + 1.0));
+      glUniform1f(program->uniform("u_north_power"), static_cast<float>(lobe.exponent));
+    }
+    if (!cosinePass(glossy_east_program_, glossy.prefiltered, glossy.intermediate, scale, "EnvironmentMaps glossy east",
+                    error))
+      return false;
+    glossy_north_program_.use();
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_CUBE_MAP, glossy.prefiltered.texture.id());
+    glUniform1i(glossy_north_program_.uniform("u_prefiltered"), 2);
+    glUniform1f(glossy_north_program_.uniform("u_prefiltered_face_size"), static_cast<float>(glossy.prefiltered.face_size));
+    glUniform1f(glossy_north_program_.uniform("u_prefiltered_scale"), glossy.prefiltered.linear_scale);
+    glUniform1f(glossy_north_program_.uniform("u_pole_cosine"),
+                static_cast<float>(std::cos(lobe.pole_direct_deg * M_PI / 180.0)));
+    glActiveTexture(GL_TEXTURE0);
+    if (!cosinePass(glossy_north_program_, glossy.intermediate, glossy.map, scale, "EnvironmentMaps glossy north",
+                    error))
+      return false;
+  }
+  glossy_written_ = settings_.glossy_levels > 0;
+  return true;
+}
+
+GLuint EnvironmentMaps::glossyCube(int level) const {
+  return level >= 0 && level < settings_.glossy_levels ? glossy_[static_cast<size_t>(level)].map.texture.id() : 0;
+}
+
 bool EnvironmentMaps::updateDiffuseFromSH9(const ibl::SH9RGB& sh, std::string& error, float new_weight) {
   const auto weight = diffuseBlendWeight(new_weight, "EnvironmentMaps::updateDiffuseFromSH9", error);
   if (!weight) return false;
@@ -549,6 +659,15 @@ std::optional<ibl::CubeMapRGB> EnvironmentMaps::readIntermediate(std::string& er
 }
 std::optional<ibl::CubeMapRGB> EnvironmentMaps::readDiffuse(std::string& error, std::vector<float>* validity) const {
   return readCube(diffuse_, error, validity);
+}
+std::optional<ibl::CubeMapRGB> EnvironmentMaps::readGlossy(int level, std::string& error,
+                                                           std::vector<float>* validity) const {
+  if (level < 0 || level >= settings_.glossy_levels) {
+    error = "EnvironmentMaps::readGlossy: level " + std::to_string(level) + " of " +
+            std::to_string(settings_.glossy_levels);
+    return std::nullopt;
+  }
+  return readCube(glossy_[static_cast<size_t>(level)].map, error, validity);
 }
 
 }  // namespace probelight::pipeline

@@ -60,13 +60,16 @@
 // at w = 0.3; any 8-bit IIR filter has this dead band.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "gles/capabilities.hpp"
 #include "gles/gl_objects.hpp"
+#include "ibl/color_transfer.hpp"
 #include "ibl/cube_map.hpp"
+#include "ibl/glossy_maps.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/spherical_blur.hpp"
 #include "ibl/spherical_harmonics.hpp"
@@ -82,9 +85,24 @@ struct EnvironmentMapSettings {
   int intermediate_face_size = 32;  // after the east pass
   int diffuse_face_size = 16;
   int normal_iterations = 4;  // unrolled in the shader; ibl::ProbeToCubeParams::normal_iterations
+  ibl::CameraTransfer camera_transfer;  // how the camera's values decode to linear light (sRGB by default)
   int blur_half_taps = 16;    // 2 * half_taps + 1 taps a pass, pi / (2 half_taps + 1) apart; 0..32
   double pole_direct_deg = 20.0;  // north taps this close to +-Z integrate their east circle directly; 0..90
+
+  // Glossy levels (updateGlossy; ibl::glossyMap, see src/ibl/glossy_maps.hpp
+  // for why these): the reflection map convolved with cos^n lobes, sharpest
+  // first. 0..2 levels; maps are allocated for the first glossy_levels.
+  int glossy_levels = 2;
+  std::array<double, 2> glossy_exponent{128.0, 16.0};  // n, >= 1
+  // Output and prefilter size: must divide reflection_face_size (factor 1..8).
+  std::array<int, 2> glossy_face_size{32, 16};
+  std::array<int, 2> glossy_intermediate_face_size{64, 32};
+  int glossy_half_taps = 8;  // 2 * half_taps + 1 taps a pass over [-3 sigma, 3 sigma]; 1..32
+  double glossy_pole_direct_deg = 10.0;  // as pole_direct_deg, for the glossy north passes
 };
+
+// The CPU reference's settings for glossy level `level`.
+ibl::GlossyLevelSettings glossyLevelSettings(const EnvironmentMapSettings& settings, int level);
 
 // The CPU reference's settings for the same maps.
 ibl::CosineIrradianceSettings cosineIrradianceSettings(const EnvironmentMapSettings& settings);
@@ -119,6 +137,15 @@ class EnvironmentMaps {
   // ibl::sh9DiffuseMap) into the diffuse map, alpha 1, blended as above. In
   // the 8-bit storage the scale is max(1, the largest value stored).
   bool updateDiffuseFromSH9(const ibl::SH9RGB& sh, std::string& error, float new_weight = 1.0f);
+  // Glossy levels from the current reflection map, each by three passes
+  // (prefilter to glossy_face_size, east cos^(n+1) into the intermediate
+  // map, north cos^n with the pole correction and the division by coverage).
+  // Same storage rules as the diffuse map: rgb is the lobe's mean radiance
+  // (normalised by validity), alpha the blurred validity, and in RGBA8 the
+  // reflection map's linear_scale. Not blended over time (the reflection
+  // map is not either). Only needed when a material's glossiness lies
+  // strictly between 0 and 1 (ibl::needsGlossy); the app skips it otherwise.
+  bool updateGlossy(std::string& error);
 
   // Read back in linear units (8-bit path decoded). `validity`, when given,
   // receives alpha laid out like CubeMapRGB::faces (face-major, row-major).
@@ -127,11 +154,18 @@ class EnvironmentMaps {
   std::optional<ibl::CubeMapRGB> readPrefiltered(std::string& error, std::vector<float>* validity = nullptr) const;
   std::optional<ibl::CubeMapRGB> readIntermediate(std::string& error, std::vector<float>* validity = nullptr) const;
   std::optional<ibl::CubeMapRGB> readDiffuse(std::string& error, std::vector<float>* validity = nullptr) const;
+  std::optional<ibl::CubeMapRGB> readGlossy(int level, std::string& error, std::vector<float>* validity = nullptr) const;
 
   GLuint reflectionCube() const { return reflection_.texture.id(); }
   GLuint diffuseCube() const { return diffuse_.texture.id(); }
   const GpuCubeMap& reflection() const { return reflection_; }
   const GpuCubeMap& diffuse() const { return diffuse_; }
+  // Level 0..glossyLevels()-1, sharpest first; 0 for a level not configured.
+  GLuint glossyCube(int level) const;
+  const GpuCubeMap& glossy(int level) const { return glossy_[static_cast<size_t>(level)].map; }
+  int glossyLevels() const { return settings_.glossy_levels; }
+  // Whether updateGlossy has run since init (before it the maps hold nothing).
+  bool glossyWritten() const { return glossy_written_; }
   CubeStorage storage() const { return storage_; }
   // E.g. "half float" or "8-bit sRGB (half float unavailable: ...)".
   const std::string& storageDescription() const { return storage_description_; }
@@ -167,6 +201,16 @@ class EnvironmentMaps {
   GpuCubeMap diffuse_;
   GpuCubeMap diffuse_spare_;  // the ping-pong partner: the next update writes here, reading diffuse_
   bool diffuse_written_ = false;
+  struct GlossyLevel {
+    gles::Program prefilter_program;  // cosine_irradiance.frag's PREFILTER_PASS with this level's factor
+    GpuCubeMap prefiltered;
+    GpuCubeMap intermediate;
+    GpuCubeMap map;
+  };
+  std::array<GlossyLevel, 2> glossy_;
+  gles::Program glossy_east_program_;
+  gles::Program glossy_north_program_;
+  bool glossy_written_ = false;
 };
 
 // GLSL #define lines selecting a storage's encoding in cube_storage.glsl.

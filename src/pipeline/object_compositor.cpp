@@ -1,6 +1,7 @@
 #include "pipeline/object_compositor.hpp"
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include <glm/gtc/constants.hpp>
@@ -127,6 +128,21 @@ bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const Po
   glUniform1i(program.uniform("u_reflection_map"), 1);
   glUniform1f(program.uniform("u_reflection_face_size"), static_cast<float>(reflection.face_size));
   glUniform1f(program.uniform("u_reflection_scale"), reflection.linear_scale);
+  // Glossy levels only when updateGlossy has made them; otherwise the ladder
+  // is mirror -> diffuse. Absent levels' samplers get the diffuse map (a
+  // complete cube map; the shader never reads them).
+  const int glossy_levels = environment.glossyWritten() ? environment.glossyLevels() : 0;
+  for (int level = 0; level < 2; ++level) {
+    const std::string name = "u_glossy" + std::to_string(level);
+    const GpuCubeMap& map = level < glossy_levels ? environment.glossy(level) : diffuse;
+    glActiveTexture(GL_TEXTURE2 + static_cast<GLenum>(level));
+    glBindTexture(GL_TEXTURE_CUBE_MAP, map.texture.id());
+    glUniform1i(program.uniform((name + "_map").c_str()), 2 + level);
+    glUniform1f(program.uniform((name + "_face_size").c_str()), static_cast<float>(map.face_size));
+    glUniform1f(program.uniform((name + "_scale").c_str()), map.linear_scale);
+  }
+  glUniform1f(program.uniform("u_glossy_levels"), static_cast<float>(glossy_levels));
+  glUniform1f(program.uniform("u_glossiness"), material.glossiness);
   glActiveTexture(GL_TEXTURE0);
 
   glUniform3fv(program.uniform("u_albedo"), 1, glm::value_ptr(material.albedo));

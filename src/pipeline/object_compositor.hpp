@@ -42,7 +42,9 @@ class ObjectCompositor {
 
   // A sphere of radius_m at centre_w (W), lit by ibl::shadeSurface with the
   // environment maps, depth-tested. The current viewport must cover the whole
-  // camera image (camera.width_px x camera.height_px).
+  // camera image (camera.width_px x camera.height_px). The reflection term
+  // uses the glossy maps when environment.glossyWritten() (ibl::needsGlossy
+  // says when the app must call updateGlossy), else the ladder mirror -> diffuse.
   bool drawSphereObject(const CameraIntrinsics& camera, const PoseCamFromWorld& pose, glm::dvec3 centre_w,
                         double radius_m, const ibl::SurfaceMaterial& material, const ibl::SceneLighting& lighting,
                         EnvironmentMaps& environment, std::string& error);

@@ -25,6 +25,10 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_DOUBLE_EQ(from_file.maps.stages.pole_direct_deg, defaults.maps.stages.pole_direct_deg);
   EXPECT_EQ(from_file.maps.stages.normal_iterations, defaults.maps.stages.normal_iterations);
   EXPECT_EQ(from_file.maps.diffuse_method, defaults.maps.diffuse_method);
+  EXPECT_EQ(from_file.maps.stages.camera_transfer.curve, defaults.maps.stages.camera_transfer.curve);
+  EXPECT_DOUBLE_EQ(from_file.maps.stages.camera_transfer.gamma, defaults.maps.stages.camera_transfer.gamma);
+  EXPECT_EQ(from_file.maps.stages.glossy_levels, defaults.maps.stages.glossy_levels);
+  EXPECT_DOUBLE_EQ(from_file.object.glossiness, defaults.object.glossiness);
   EXPECT_EQ(from_file.maps.force_8bit, defaults.maps.force_8bit);
   EXPECT_DOUBLE_EQ(from_file.tracking.quad_decimate, defaults.tracking.quad_decimate);
   EXPECT_EQ(from_file.tracking.threads, defaults.tracking.threads);

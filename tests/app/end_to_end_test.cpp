@@ -211,6 +211,25 @@ TEST_F(EndToEnd, Sh9DiffuseMethodRunsAndIsAccurateOnASmoothSky) {
   EXPECT_LT(report["accuracy"]["diffuse_irradiance_rel_error_vs_clipped"].get<double>(), 0.05);
 }
 
+// Glossy maps are made only when the object's material reads them: a
+// mirror (glossiness 1, the default) skips the stage, glossiness 0.5 runs it
+// with every map update.
+TEST_F(EndToEnd, GlossyMapsAreMadeOnlyForAGlossyObject) {
+  const fs::path config = dir_ / "glossy.yaml";
+  std::ofstream(config) << "object:\n  glossiness: 0.5\n  k_reflect: 0.3\n";
+  const fs::path glossy_out = dir_ / "glossy", mirror_out = dir_ / "mirror";
+  CommandResult result = run("run --frames 6 --save-every 0 --config " + config.string() + " --out " + glossy_out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  result = run("run --frames 6 --save-every 0 --out " + mirror_out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json glossy = readReport(glossy_out);
+  const nlohmann::json mirror = readReport(mirror_out);
+  ASSERT_TRUE(glossy["stages"].contains("glossy"));
+  EXPECT_EQ(glossy["stages"]["glossy"]["runs"], glossy["stages"]["probe_to_cube"]["runs"]);
+  EXPECT_FALSE(mirror["stages"].contains("glossy"));
+  expectAllNumbersFinite(glossy["accuracy"], "accuracy");
+}
+
 TEST_F(EndToEnd, FramesWithoutATagStillShowAndSayWhy) {
   // An all-black, an all-white, and an empty (undecodable) file; a real
   // frame is not needed to check that nothing crashes and the status is set.

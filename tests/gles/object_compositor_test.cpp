@@ -259,6 +259,18 @@ TEST_P(SphereShadingTest, MatchesCpuShadeSurface) {
   ASSERT_TRUE(diffuse) << error;
   const auto reflection = stage.maps.readReflection(error);
   ASSERT_TRUE(reflection) << error;
+  // Glossy levels too, so the loop below checks glossiness 1 (today's
+  // mirror), 0 (the diffuse lobe) and one value between glossy maps.
+  ASSERT_TRUE(stage.maps.updateGlossy(error)) << error;
+  std::vector<ibl::CubeMapRGB> glossy_maps;
+  for (int level = 0; level < stage.maps.glossyLevels(); ++level) {
+    const auto glossy = stage.maps.readGlossy(level, error);
+    ASSERT_TRUE(glossy) << error;
+    glossy_maps.push_back(*glossy);
+  }
+  std::vector<const ibl::CubeMapRGB*> glossy;
+  for (const auto& map : glossy_maps) glossy.push_back(&map);
+  for (const float glossiness : {1.0f, 0.45f, 0.0f}) {
 
   ImageRGB8 grey;
   grey.resize(scene.camera.width_px, scene.camera.height_px);
@@ -271,6 +283,7 @@ TEST_P(SphereShadingTest, MatchesCpuShadeSurface) {
   material.k_specular = 0.3f;
   material.shininess = 24.0f;
   material.k_reflect = 0.25f;
+  material.glossiness = glossiness;
   ibl::SceneLighting lighting;
   lighting.ambient_rgb = {0.1f, 0.1f, 0.12f};
   lighting.highlight_direction_w = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
@@ -286,7 +299,7 @@ TEST_P(SphereShadingTest, MatchesCpuShadeSurface) {
   const glm::dvec3 eye = scene.pose.cameraCenterWorld();
   const glm::dmat3 world_from_cam = glm::transpose(scene.pose.R_cam_from_world);
   auto shade_levels = [&](const glm::vec3& normal, const glm::vec3& to_eye) {
-    const glm::vec3 linear = ibl::shadeSurface(normal, to_eye, *diffuse, *reflection, material, lighting);
+    const glm::vec3 linear = ibl::shadeSurface(normal, to_eye, *diffuse, *reflection, glossy, material, lighting);
     return glm::dvec3(ibl::linearToSrgb(linear.r), ibl::linearToSrgb(linear.g), ibl::linearToSrgb(linear.b)) * 255.0;
   };
   int compared = 0;
@@ -322,10 +335,11 @@ TEST_P(SphereShadingTest, MatchesCpuShadeSurface) {
       ++compared;
     }
   }
-  std::printf("[ measure  ] sphere shading (%s maps): %d px compared, max |GPU-CPU| %.2f levels\n",
-              stage.maps.storageDescription().c_str(), compared, max_error);
+  std::printf("[ measure  ] sphere shading (%s maps, glossiness %.2f): %d px compared, max |GPU-CPU| %.2f levels\n",
+              stage.maps.storageDescription().c_str(), glossiness, compared, max_error);
   EXPECT_GT(compared, 5000);
   EXPECT_LE(max_excess, 0.0);
+  }
 }
 
 // Not a pass/fail benchmark: prints per-stage times on this GPU (after one

@@ -29,7 +29,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 bool finite(const glm::dvec2& v) { return std::isfinite(v.x) && std::isfinite(v.y); }
 bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // Vectors with one bad component in each position, plus all-bad and zero.
 std::vector<glm::dvec3> badVectors() {
