@@ -33,6 +33,7 @@
 #include "gles/render_target.hpp"
 #include "ibl/cube_map.hpp"
 #include "ibl/irradiance.hpp"
+#include "ibl/spherical_harmonics.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
 #include "ibl/probe_to_cube.hpp"
@@ -403,9 +404,18 @@ void probeToCube(benchmark::State& state, bool eight_bit, int face_size, int ite
 }
 
 // ---------------------------------------------------------------------------
-// 3. diffuse_blur (GPU)
+// 3. diffuse_blur (GPU cosine passes) and diffuse_sh9 (read-back, CPU
+//    projection, GPU evaluation): the two diffuse methods side by side.
 
-void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int half_taps) {
+// One diffuse update by the chosen method.
+bool updateDiffuseMap(pipeline::EnvironmentMaps& maps, bool sh9, std::string& error) {
+  if (!sh9) return maps.updateDiffuse(error);
+  std::vector<float> validity;
+  const std::optional<ibl::CubeMapRGB> reflection = maps.readReflection(error, &validity);
+  return reflection && maps.updateDiffuseFromSH9(ibl::projectToSH9(*reflection, &validity), error);
+}
+
+void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int half_taps, bool sh9 = false) {
   if (!requireGl(state)) return;
   Setup& s = setup();
   const gles::Capabilities& capabilities = eight_bit ? s.capabilities_8bit : s.capabilities_full;
@@ -420,8 +430,10 @@ void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int hal
     state.SkipWithError(error.c_str());
     return;
   }
-  const std::string name = std::string("diffuse_blur/") + (eight_bit ? "8bit" : "half") +
-                           "/face:" + std::to_string(face_size) + "/half_taps:" + std::to_string(half_taps);
+  const std::string name = sh9 ? std::string("diffuse_sh9/") + (eight_bit ? "8bit" : "half") + "/face:" +
+                                     std::to_string(face_size)
+                               : std::string("diffuse_blur/") + (eight_bit ? "8bit" : "half") + "/face:" +
+                                     std::to_string(face_size) + "/half_taps:" + std::to_string(half_taps);
   bool failed = false;
   const ErrorRow& row = errorsFor(name, [&] {
     ErrorRow r;
@@ -430,7 +442,7 @@ void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int hal
     for (size_t f = 0; f < s.frames.size(); ++f) {
       std::optional<ibl::CubeMapRGB> reflection, diffuse;
       if (!maps.updateReflection(*frames.textures[f], s.frames[f].view, s.scene.rig.probe_reflectance, error) ||
-          !maps.updateDiffuse(error) || !(reflection = maps.readReflection(error)) ||
+          !updateDiffuseMap(maps, sh9, error) || !(reflection = maps.readReflection(error)) ||
           !(diffuse = maps.readDiffuse(error))) {
         failed = true;
         return r;
@@ -467,7 +479,7 @@ void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int hal
   }
   glFinish();
   for (auto _ : state) {
-    if (!maps.updateDiffuse(error)) {
+    if (!updateDiffuseMap(maps, sh9, error)) {
       state.SkipWithError(error.c_str());
       break;
     }
@@ -666,6 +678,13 @@ void registerAll() {
       ->Unit(kMillisecond)
       ->UseRealTime()
       ->MinTime(kMinTime);
+
+  for (bool eight_bit : {false, true})
+    benchmark::RegisterBenchmark((std::string("diffuse_sh9/") + (eight_bit ? "8bit" : "half") + "/face:16").c_str(),
+                                 [=](benchmark::State& state) { diffuseBlur(state, eight_bit, 16, 0, true); })
+        ->Unit(kMillisecond)
+        ->UseRealTime()
+        ->MinTime(kMinTime);
 
   benchmark::RegisterBenchmark("render/640x480", renderFrame)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
   benchmark::RegisterBenchmark("present_readback/640x480", presentReadback)
