@@ -91,29 +91,6 @@ std::vector<cv::Point> projectSegment(const CameraIntrinsics& camera, const Pose
   return points;
 }
 
-// The ball's outline polygon, for drawing only: the tangency circle that
-// ibl::computeProbeOutline measures (which returns no polygon), sampled the
-// same way. The numbers in analysis.json come from computeProbeOutline.
-std::vector<cv::Point> probeOutlinePolygon(const ibl::MirrorBallView& view, int samples = 128) {
-  std::vector<cv::Point> points;
-  const glm::dvec3 center_cam = view.pose.toCamera(view.center_w);
-  const double distance = glm::length(center_cam);
-  const double radius = view.radius_m;
-  if (radius <= 0.0 || distance <= radius * 1.0001) return points;
-  const glm::dvec3 axis = center_cam / distance;
-  const double along = (distance * distance - radius * radius) / distance;
-  const double circle_radius = radius * std::sqrt(distance * distance - radius * radius) / distance;
-  const glm::dvec3 helper = std::abs(axis.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
-  const glm::dvec3 u = glm::normalize(glm::cross(axis, helper));
-  const glm::dvec3 v = glm::cross(axis, u);
-  for (int i = 0; i < samples; ++i) {
-    const double angle = 2.0 * M_PI * i / samples;
-    const glm::dvec3 p = axis * along + circle_radius * (std::cos(angle) * u + std::sin(angle) * v);
-    if (p.z <= 1e-9) return {};
-    points.push_back(toPoint(ibl::projectToPixel(view.camera, p)));
-  }
-  return points;
-}
 
 // The overlay's caption, on a dark strip across the top, wrapped at spaces
 // so that a long reason fits a narrow frame.
@@ -412,7 +389,8 @@ class Analyzer {
       }
       caption = rig_.tag_family + " id " + std::to_string(track_.id);
       if (view_ && outline_.valid) {
-        const std::vector<cv::Point> ball = probeOutlinePolygon(*view_);
+        std::vector<cv::Point> ball;
+        for (const glm::dvec2& point : outline_.polygon_px) ball.push_back(toPoint(point));
         if (!ball.empty()) cv::polylines(overlay, ball, true, kBallColour, 1, cv::LINE_AA);
         cv::drawMarker(overlay, toPoint(outline_.center_px), kBallColour, cv::MARKER_CROSS, 7, 1);
         caption += "   ball r " + formatFixed(outline_.radius_px, 1) + " px";

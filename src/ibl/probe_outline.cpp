@@ -56,6 +56,7 @@ ProbeOutline computeProbeOutline(const MirrorBallView& view, int samples) {
   outline.fully_in_image = outline.min_px.x >= 0.0 && outline.min_px.y >= 0.0 &&
                            outline.max_px.x <= view.camera.width_px - 1.0 &&
                            outline.max_px.y <= view.camera.height_px - 1.0;
+  outline.polygon_px = std::move(points);
   outline.valid = true;
   return outline;
 }

@@ -6,6 +6,8 @@
 // independent one for its truth.
 #pragma once
 
+#include <vector>
+
 #include <glm/glm.hpp>
 
 #include "ibl/mirror_ball.hpp"
@@ -19,6 +21,7 @@ struct ProbeOutline {
   glm::dvec2 min_px{0.0};         // bounding box of the outline
   glm::dvec2 max_px{0.0};
   bool fully_in_image = false;    // every outline point lies inside the image
+  std::vector<glm::dvec2> polygon_px;  // the outline itself, for drawing (empty when invalid)
 };
 
 // `samples` points around the tangency circle, projected with distortion;
