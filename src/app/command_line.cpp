@@ -1,6 +1,7 @@
 #include "app/command_line.hpp"
 
 #include <charconv>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <optional>
@@ -110,6 +111,53 @@ AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
   return options;
 }
 
+namespace {
+
+// --board COLSxROWS, inner corners. OpenCV's detector needs at least 3 each
+// way (it throws below that), so 1x1 or 2x5 is refused here with the flag's name.
+void parseBoard(const std::string& flag, const std::string& text, int& cols, int& rows) {
+  const auto x = text.find_first_of("xX");
+  const std::string bad = "flag " + flag + ": expected inner corners as COLSxROWS (e.g. 9x6), got '" + text + "'";
+  if (x == std::string::npos) throw UsageError(bad);
+  auto whole = [&](const std::string& part, int& value) {
+    auto [ptr, ec] = std::from_chars(part.data(), part.data() + part.size(), value);
+    if (part.empty() || ec != std::errc() || ptr != part.data() + part.size()) throw UsageError(bad);
+  };
+  whole(text.substr(0, x), cols);
+  whole(text.substr(x + 1), rows);
+  if (cols < 3 || rows < 3)
+    throw UsageError("flag " + flag + ": the board needs at least 3x3 inner corners, got '" + text + "'");
+}
+
+// --square in metres. Above 1 m is almost surely millimetres typed as metres
+// (25 for 0.025); the focal length would not care, but the saved poses would.
+double parseSquare(const std::string& flag, const std::string& text) {
+  double value = 0.0;
+  auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || ptr != text.data() + text.size() || !std::isfinite(value))
+    throw UsageError("flag " + flag + ": expected the square's edge in metres (e.g. 0.025), got '" + text + "'");
+  if (value <= 0.0 || value > 1.0)
+    throw UsageError("flag " + flag + ": the square's edge must be in (0, 1] metres, got '" + text + "'");
+  return value;
+}
+
+}  // namespace
+
+CalibrateCameraOptions parseCalibrateCameraOptions(const std::vector<std::string>& args) {
+  CalibrateCameraOptions options;
+  parseFlags(args,
+             {{"--images", [&](auto&, auto& v) { options.images = v; }},
+              {"--board", [&](auto& f, auto& v) { parseBoard(f, v, options.board_cols, options.board_rows); }},
+              {"--square", [&](auto& f, auto& v) { options.square_m = parseSquare(f, v); }},
+              {"--out", [&](auto&, auto& v) { options.out_path = v; }}},
+             {}, "calibrate-camera");
+  if (options.images.empty()) throw UsageError("calibrate-camera needs --images GLOB (the chessboard views)");
+  if (options.board_cols == 0) throw UsageError("calibrate-camera needs --board COLSxROWS (inner corners, e.g. 9x6)");
+  if (options.square_m == 0.0) throw UsageError("calibrate-camera needs --square METRES (a square's edge, e.g. 0.025)");
+  if (options.out_path.empty()) throw UsageError("calibrate-camera needs --out camera.yaml");
+  return options;
+}
+
 std::string usageText() {
   return R"(probelight: image-based lighting for an AR kiosk (mirror ball + AprilTag)
 
@@ -118,6 +166,9 @@ usage:
   probelight analyze --frame F --camera camera.yaml --rig rig.yaml --out DIR [--config probelight.yaml]
                                one frame in: DIR/analysis.json (tag, pose, ball, irradiance, timings)
                                and pictures (overlay.png, ball.png, reflection_cross.png, diffuse_cross.png)
+  probelight calibrate-camera --images GLOB --board COLSxROWS --square METRES --out camera.yaml
+                               chessboard views in, camera.yaml out; prints the RMS and per-view
+                               reprojection errors and why each rejected view was rejected
   probelight --help | --version
 
 run flags:
@@ -136,7 +187,14 @@ run flags:
   --path NAME                  sim: camera path: static, orbit, slow_wobble, random
   --quiet                      no per-frame status lines
 
-exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration,
+calibrate-camera flags:
+  --images GLOB                the views, e.g. 'captures/board_*.png' (quoted)
+  --board COLSxROWS            inner corners of the chessboard, e.g. 9x6
+  --square METRES              edge of one square, e.g. 0.025
+  --out camera.yaml            where the calibration goes
+
+exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration
+             (calibrate-camera: also no matching files or too few usable views),
              3 (analyze) the tag or the ball was not found: analysis.json says why.
 )";
 }

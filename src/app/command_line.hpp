@@ -48,6 +48,20 @@ struct AnalyzeOptions {
 // Parses the flags after `probelight analyze`. Throws UsageError.
 AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args);
 
+// Flags of `probelight calibrate-camera`: chessboard views in, camera.yaml
+// out. All are required: a wrong board size finds no corners, and a default
+// --out could overwrite the kiosk's calibration.
+struct CalibrateCameraOptions {
+  std::string images;       // glob of the views (quote it so the shell leaves it alone)
+  int board_cols = 0;       // inner corners along a row (the 9 of --board 9x6)
+  int board_rows = 0;       // inner corners along a column (the 6)
+  double square_m = 0.0;    // edge of one square, metres
+  std::string out_path;     // camera.yaml to write
+};
+
+// Parses the flags after `probelight calibrate-camera`. Throws UsageError.
+CalibrateCameraOptions parseCalibrateCameraOptions(const std::vector<std::string>& args);
+
 std::string usageText();
 
 }  // namespace probelight

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "app/analyze.hpp"
+#include "app/calibrate_camera.hpp"
 #include "app/command_line.hpp"
 #include "app/kiosk.hpp"
 
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
   try {
     if (command == "run") return runKiosk(parseRunOptions(args), std::cerr);
     if (command == "analyze") return runAnalyze(parseAnalyzeOptions(args), std::cerr);
+    if (command == "calibrate-camera") return runCalibrateCamera(parseCalibrateCameraOptions(args), std::cout, std::cerr);
     throw UsageError("unknown command '" + command + "' (see probelight --help)");
   } catch (const UsageError& error) {
     std::cerr << "probelight: " << error.what() << "\n";
