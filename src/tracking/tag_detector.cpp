@@ -73,6 +73,8 @@ int TagDetector::minimumFrameSizePx() const {
   return static_cast<int>(std::ceil(kMinimumDecimatedSizePx * settings_.quad_decimate));
 }
 
+int TagDetector::borderWidthCells() const { return family_ ? family_->width_at_border : 0; }
+
 std::vector<TagDetection> TagDetector::detect(const std::uint8_t* luma, int width, int height, int stride_bytes) {
   std::vector<TagDetection> found;
   if (!luma || !detector_ || stride_bytes < width) return found;

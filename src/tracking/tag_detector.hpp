@@ -36,6 +36,13 @@ struct TagDetectorSettings {
   // than this, the corners cannot tell them apart (detection noise is a few
   // tenths of a pixel) and the one nearer the previous frame's pose wins.
   double pose_ambiguity_margin_px = 0.5;
+  // Re-fit each tag edge at full resolution in linear light and intersect the
+  // lines (corner_refiner.hpp), then polish the pose on every edge point of
+  // the tag, bit cells included: removes the sRGB edge bias of refine_edges
+  // (-0.17 px, the dark quad shrunk) and pins near fronto-parallel tilts.
+  // Costs ~2 ms a frame on the desktop; tests/tracking/pose_accuracy_test.cpp
+  // measures both settings.
+  bool refine_corners = true;
 };
 
 // AprilTag reports pixel coordinates with pixel i spanning [i, i+1), so its
@@ -88,6 +95,8 @@ class TagDetector {
   // Smallest width and height detect() looks at: libapriltag crashes on
   // images that decimate to a pixel or two.
   int minimumFrameSizePx() const;
+  // The family's width_at_border: the detected quad's side in bit cells.
+  int borderWidthCells() const;
 
  private:
   TagDetectorSettings settings_;

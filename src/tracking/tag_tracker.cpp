@@ -8,6 +8,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tracking/corner_refiner.hpp"
+
 namespace probelight::tracking {
 
 namespace {
@@ -33,6 +35,120 @@ std::string describeIds(const std::vector<TagDetection>& detections) {
   std::string ids;
   for (const TagDetection& detection : detections) ids += (ids.empty() ? "" : ", ") + std::to_string(detection.id);
   return ids;
+}
+
+}  // namespace
+
+namespace {
+
+// Each IPPE solution polished by Gauss-Newton on every edge point the
+// refiner found (outer edges and bit-cell boundaries): the residual is a
+// point's distance to the projection of its tag segment (pinhole, points
+// already undistorted). Hundreds of points at many positions and sub-pixel
+// phases pin the tilt that four corners leave loose near fronto-parallel
+// views. Each solution stays in its own basin (the two are separate minima),
+// so the flip choice still sees both. The reported reprojection error stays
+// that of the four outer corners, which the ambiguity margin is set for.
+void refineOnEdgePoints(std::vector<TagPoseSolution>& solutions, const std::array<glm::dvec2, 4>& corners_px,
+                        const std::vector<TagEdgePoint>& points, double tag_size_m, const CameraIntrinsics& camera) {
+  if (points.size() < 12) return;
+  const double start_separation_deg =
+      solutions.size() == 2
+          ? rotationDifferenceDeg(solutions[0].pose.R_cam_from_world, solutions[1].pose.R_cam_from_world)
+          : 0.0;
+  const double half = tag_size_m / 2.0;
+  auto residuals = [&](const glm::dmat3& R, const glm::dvec3& t, std::vector<double>& out) {
+    out.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      auto project = [&](glm::dvec2 q) {
+        glm::dvec3 c = R * glm::dvec3(q.x * half, q.y * half, 0.0) + t;
+        return glm::dvec2(camera.fx_px * c.x / c.z + camera.cx_px, camera.fy_px * c.y / c.z + camera.cy_px);
+      };
+      glm::dvec2 a = project(points[i].segment_a), b = project(points[i].segment_b);
+      glm::dvec2 d = glm::normalize(b - a);
+      glm::dvec2 r = points[i].undistorted_px - a;
+      out[i] = r.x * d.y - r.y * d.x;
+    }
+  };
+  auto rotationFromVector = [](const glm::dvec3& w) {
+    cv::Matx33d m;
+    cv::Rodrigues(cv::Vec3d(w.x, w.y, w.z), m);
+    return toGlm(m);
+  };
+  // Huber weights at a quarter pixel: edge points are good to a few
+  // hundredths of a pixel, so one farther out is a misplaced profile (a
+  // cell boundary blurred into its neighbour), down-weighted, not trusted.
+  constexpr double kHuberPx = 0.25;
+  for (TagPoseSolution& solution : solutions) {
+    glm::dmat3 R = solution.pose.R_cam_from_world;
+    glm::dvec3 t = solution.pose.t_cam_from_world;
+    std::vector<double> r, r_step;
+    for (int iteration = 0; iteration < 6; ++iteration) {
+      residuals(R, t, r);
+      // Parameters: a small rotation applied on the left (camera frame), then t.
+      cv::Mat JtJ = cv::Mat::zeros(6, 6, CV_64F), Jtr = cv::Mat::zeros(6, 1, CV_64F);
+      std::vector<std::vector<double>> columns(6);
+      for (int p = 0; p < 6; ++p) {
+        double h = p < 3 ? 1e-6 : 1e-6 * std::max(1e-3, glm::length(t));
+        glm::dvec3 delta(0.0);
+        delta[p % 3] = h;
+        if (p < 3) residuals(rotationFromVector(delta) * R, t, r_step);
+        else residuals(R, t + delta, r_step);
+        columns[static_cast<std::size_t>(p)].resize(r.size());
+        for (std::size_t i = 0; i < r.size(); ++i) columns[static_cast<std::size_t>(p)][i] = (r_step[i] - r[i]) / h;
+      }
+      for (std::size_t i = 0; i < r.size(); ++i) {
+        double weight = std::abs(r[i]) <= kHuberPx ? 1.0 : kHuberPx / std::abs(r[i]);
+        for (int p = 0; p < 6; ++p) {
+          Jtr.at<double>(p) += weight * columns[static_cast<std::size_t>(p)][i] * r[i];
+          for (int q = 0; q < 6; ++q)
+            JtJ.at<double>(p, q) += weight * columns[static_cast<std::size_t>(p)][i] * columns[static_cast<std::size_t>(q)][i];
+        }
+      }
+      cv::Mat step;
+      if (!cv::solve(JtJ, -Jtr, step, cv::DECOMP_CHOLESKY)) break;
+      glm::dvec3 dw(step.at<double>(0), step.at<double>(1), step.at<double>(2));
+      glm::dvec3 dt(step.at<double>(3), step.at<double>(4), step.at<double>(5));
+      R = rotationFromVector(dw) * R;
+      t += dt;
+      if (glm::length(dw) < 1e-9 && glm::length(dt) < 1e-9 * glm::length(t)) break;
+    }
+    if (!(t.z > 0.0) || !std::isfinite(t.z)) continue;
+    // Reprojection error of the outer corners, in the distorted frame, as solveTagPoses reports it.
+    cv::Matx33d Rcv;
+    for (int row = 0; row < 3; ++row)
+      for (int col = 0; col < 3; ++col) Rcv(row, col) = R[col][row];
+    cv::Vec3d rvec;
+    cv::Rodrigues(Rcv, rvec);
+    std::vector<cv::Point3d> world;
+    for (const glm::dvec3& p : tagCornersWorld(tag_size_m)) world.emplace_back(p.x, p.y, p.z);
+    std::vector<cv::Point2d> projected;
+    cv::projectPoints(world, rvec, cv::Vec3d(t.x, t.y, t.z), cameraMatrix(camera), distortionVector(camera), projected);
+    double squared_sum = 0.0;
+    for (std::size_t k = 0; k < 4; ++k) {
+      cv::Point2d d = projected[k] - cv::Point2d(corners_px[k].x, corners_px[k].y);
+      squared_sum += d.dot(d);
+    }
+    double error = std::sqrt(squared_sum / 4.0);
+    // The polished pose must still fit the outer corners about as well (the
+    // edge points include them): a pixel worse means it was led astray, e.g.
+    // by a pattern that is not the tag's grid; keep the four-corner pose.
+    if (!std::isfinite(error) || error > solution.reprojection_error_px + 1.0) continue;
+    solution.pose.R_cam_from_world = R;
+    solution.pose.t_cam_from_world = t;
+    solution.reprojection_error_px = error;
+  }
+  std::sort(solutions.begin(), solutions.end(),
+            [](const TagPoseSolution& a, const TagPoseSolution& b) { return a.reprojection_error_px < b.reprojection_error_px; });
+  // With the bit cells' edges the mirrored solution is often no longer a
+  // minimum: both starts converge to one pose (within the Huber reweighting's
+  // last step, thousandths of a degree). Ending at under a twentieth of the
+  // distance they started apart means one basin: there is no ambiguity left
+  // to resolve, so keep one.
+  if (solutions.size() == 2 &&
+      rotationDifferenceDeg(solutions[0].pose.R_cam_from_world, solutions[1].pose.R_cam_from_world) <
+          0.05 * start_separation_deg)
+    solutions.pop_back();
 }
 
 }  // namespace
@@ -173,8 +289,23 @@ TagTrackResult TagTracker::track(const std::uint8_t* luma, int width, int height
   result.corners_px = chosen->corners_px;
   result.decision_margin = chosen->decision_margin;
   result.hamming = chosen->hamming;
+  std::vector<TagEdgePoint> edge_points;
+  if (detector_.settings().refine_corners) {
+    // Falls back to the detector's corners when an edge cannot be re-fitted
+    // (too little contrast, partly outside the frame).
+    if (auto refined = refineTagCorners(luma, width, height, stride_bytes, chosen->corners_px, camera_,
+                                        detector_.borderWidthCells())) {
+      result.corners_px = refined->corners_px;
+      edge_points = std::move(refined->edge_points);
+    }
+  }
 
-  std::vector<TagPoseSolution> solutions = solveTagPoses(chosen->corners_px, rig_.tag_size_m, camera_);
+  std::vector<TagPoseSolution> solutions = solveTagPoses(result.corners_px, rig_.tag_size_m, camera_);
+  try {
+    refineOnEdgePoints(solutions, result.corners_px, edge_points, rig_.tag_size_m, camera_);
+  } catch (const cv::Exception&) {
+    // keep the four-corner solutions
+  }
   if (solutions.empty()) {
     result.status_code = TagTrackStatus::kPoseFailed;
     result.status = "pose failed: tag " + std::to_string(chosen->id) + " found but no planar pose fits its corners";

@@ -77,7 +77,9 @@ struct TagTrackResult {
   int hamming = 0;
   PoseCamFromWorld pose;
   double reprojection_error_px = 0.0;  // of `pose`
-  // Of the other planar solution; +inf when IPPE gave only one.
+  // Of the other planar solution; +inf when there is only one: IPPE gave
+  // one, or (refine_corners) both converged to the same pose when polished on
+  // the tag's bit-cell edges, which then settle the planar ambiguity.
   double alternative_reprojection_error_px = 0.0;
   std::optional<PoseCamFromWorld> alternative_pose;
   // The two solutions were within the ambiguity margin, so the choice was

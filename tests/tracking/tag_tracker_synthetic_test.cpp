@@ -275,25 +275,36 @@ TEST(TagTrackerSynthetic, RenderedNearFrontoParallelSequenceStaysOnTheTrueSide) 
   scene.noise_sigma = 3.0;
   TagTracker tracker(tracking::TagDetectorSettings{}, rigFor(scene), scene.camera);
   constexpr int kFrames = 60;
-  int ambiguous_frames = 0;
+  int ambiguous_frames = 0, merged_frames = 0;
   for (int i = 0; i < kFrames; ++i) {
     scene.pose = nearFrontoParallelPose(i, 0.7, 3.5, 1.0);
     scene.noise_seed = static_cast<unsigned>(100 + i);
     TagTrackResult result = trackScene(tracker, scene);
     ASSERT_TRUE(result.found) << "frame " << i << ": " << result.status;
-    ASSERT_TRUE(result.alternative_pose.has_value()) << "frame " << i;
+    const glm::dmat3& truth = scene.pose.R_cam_from_world;
+    if (!result.alternative_pose) {
+      // Both planar solutions converged to one pose on the bit cells' edges
+      // (TagDetectorSettings::refine_corners): the data resolved the
+      // ambiguity. The mirrored pose is about twice the 2.5-4.5 deg view
+      // angle away, so a flip would be >= 5 deg off; half of that is the bound.
+      ++merged_frames;
+      EXPECT_LT(tracking::rotationDifferenceDeg(result.pose.R_cam_from_world, truth), 2.5) << "frame " << i;
+      continue;
+    }
     ambiguous_frames += result.pose_ambiguous;
     // As in PoseFlipResolver's test: a flip would make the chosen error exceed
     // the other's by about the solutions' separation.
-    const glm::dmat3& truth = scene.pose.R_cam_from_world;
     double separation_deg = tracking::rotationDifferenceDeg(result.pose.R_cam_from_world, result.alternative_pose->R_cam_from_world);
     EXPECT_LT(tracking::rotationDifferenceDeg(result.pose.R_cam_from_world, truth) -
                   tracking::rotationDifferenceDeg(result.alternative_pose->R_cam_from_world, truth),
               separation_deg / 2)
         << "frame " << i;
   }
-  std::printf("[ flip, rendered ] %d frames, %d ambiguous\n", kFrames, ambiguous_frames);
-  EXPECT_GE(ambiguous_frames, 10);
+  std::printf("[ flip, rendered ] %d frames, %d ambiguous, %d with one solution left\n", kFrames, ambiguous_frames,
+              merged_frames);
+  // The sequence must exercise the ambiguity: frames where the corners could
+  // not tell the solutions apart, whether history or the bit cells decided.
+  EXPECT_GE(ambiguous_frames + merged_frames, 10);
 }
 
 TEST(TagTrackerSynthetic, DegenerateFramesDoNotCrash) {

@@ -1,0 +1,350 @@
+#include "tracking/corner_refiner.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace probelight::tracking {
+
+namespace {
+
+// sRGB code -> linear light. The simulator encodes sRGB, and so do the UVC and
+// libcamera pipelines the kiosk uses by default; for another transfer the
+// decode is approximate but still monotonic, so edges stay found.
+const std::array<double, 256>& srgbToLinearTable() {
+  static const std::array<double, 256> table = [] {
+    std::array<double, 256> t{};
+    for (int i = 0; i < 256; ++i) {
+      double c = i / 255.0;
+      t[static_cast<std::size_t>(i)] = c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+    }
+    return t;
+  }();
+  return table;
+}
+
+class LinearImage {
+ public:
+  LinearImage(const std::uint8_t* luma, int width, int height, int stride)
+      : luma_(luma), width_(width), height_(height), stride_(stride), lut_(srgbToLinearTable()) {}
+  // Bilinear in linear light (decode first, then interpolate: the average of
+  // the codes is not the code of the average). Empty outside the frame.
+  bool sample(glm::dvec2 p, double& value) const {
+    double fx = std::floor(p.x), fy = std::floor(p.y);
+    int x = static_cast<int>(fx), y = static_cast<int>(fy);
+    if (x < 0 || y < 0 || x + 1 >= width_ || y + 1 >= height_) return false;
+    double ax = p.x - fx, ay = p.y - fy;
+    const std::uint8_t* row0 = luma_ + static_cast<std::ptrdiff_t>(y) * stride_ + x;
+    const std::uint8_t* row1 = row0 + stride_;
+    double top = (1.0 - ax) * lut_[row0[0]] + ax * lut_[row0[1]];
+    double bottom = (1.0 - ax) * lut_[row1[0]] + ax * lut_[row1[1]];
+    value = (1.0 - ay) * top + ay * bottom;
+    return true;
+  }
+
+ private:
+  const std::uint8_t* luma_;
+  int width_, height_, stride_;
+  const std::array<double, 256>& lut_;
+};
+
+// Lens model both ways, in pixels. P = K keeps undistorted points in pixels.
+struct Lens {
+  cv::Matx33d K;
+  cv::Mat distortion;
+  explicit Lens(const CameraIntrinsics& camera)
+      : K(camera.fx_px, 0.0, camera.cx_px, 0.0, camera.fy_px, camera.cy_px, 0.0, 0.0, 1.0), distortion(1, 5, CV_64F) {
+    for (int i = 0; i < 5; ++i) distortion.at<double>(0, i) = camera.distortion[static_cast<std::size_t>(i)];
+  }
+  std::vector<cv::Point2d> undistort(const std::vector<cv::Point2d>& distorted_px) const {
+    std::vector<cv::Point2d> out;
+    if (distorted_px.empty()) return out;
+    cv::undistortPoints(distorted_px, out, K, distortion, cv::noArray(), K,
+                        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 1e-10));
+    return out;
+  }
+  std::vector<cv::Point2d> distort(const std::vector<cv::Point2d>& undistorted_px) const {
+    std::vector<cv::Point2d> out;
+    if (undistorted_px.empty()) return out;
+    std::vector<cv::Point3d> rays;
+    for (const cv::Point2d& p : undistorted_px) rays.emplace_back((p.x - K(0, 2)) / K(0, 0), (p.y - K(1, 2)) / K(1, 1), 1.0);
+    cv::projectPoints(rays, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, distortion, out);
+    return out;
+  }
+};
+
+glm::dvec2 toGlm(const cv::Point2d& p) { return {p.x, p.y}; }
+cv::Point2d toCv(const glm::dvec2& p) { return {p.x, p.y}; }
+
+// One profile across the edge, from inside (-R) to outside (+R) along the
+// outward normal, in linear light; the plateau levels are the means of its
+// outer quarters. Empty when the window leaves the frame.
+struct EdgeProfile {
+  glm::dvec2 centre{0.0}, outward{0.0};
+  double half_width_px = 0.0, step_px = 0.0;
+  std::vector<double> values;
+  double inside = 0.0, outside = 0.0;
+};
+
+std::optional<EdgeProfile> sampleProfile(const LinearImage& image, glm::dvec2 centre, glm::dvec2 outward,
+                                         double half_width_px) {
+  // 4 samples a pixel: the trapezoid rule then follows the bilinear
+  // interpolant's kinks closely (the area rule needs the integral, not the shape).
+  constexpr double kStepPx = 0.25;
+  int n = static_cast<int>(std::ceil(half_width_px / kStepPx));
+  EdgeProfile profile{centre, outward, half_width_px, half_width_px / n, std::vector<double>(static_cast<std::size_t>(2 * n + 1))};
+  for (int i = -n; i <= n; ++i)
+    if (!image.sample(centre + (i * profile.step_px) * outward, profile.values[static_cast<std::size_t>(i + n)]))
+      return std::nullopt;
+  int ends = std::max(1, n / 4);
+  for (int i = 0; i < ends; ++i) {
+    profile.inside += profile.values[static_cast<std::size_t>(i)];
+    profile.outside += profile.values[profile.values.size() - 1 - static_cast<std::size_t>(i)];
+  }
+  profile.inside /= ends;
+  profile.outside /= ends;
+  return profile;
+}
+
+// Offset (px, along the outward normal) of the step's edge from the profile's
+// centre by the area rule of the header, with plateau levels `inside` and
+// `outside`; empty when the step has too little contrast to trust.
+std::optional<double> edgeOffset(const EdgeProfile& profile, double inside, double outside) {
+  double contrast = outside - inside;
+  // Either polarity (reversed-border families have white inside the quad's
+  // edge); a weak step (shadow, glare, occluder) would give a position
+  // dominated by noise, so it is dropped.
+  if (!(std::abs(contrast) > 0.02) || !(std::abs(contrast) > 0.2 * std::max(outside, inside))) return std::nullopt;
+  double area = 0.0;
+  for (std::size_t i = 0; i + 1 < profile.values.size(); ++i)
+    area += 0.5 * profile.step_px * ((profile.values[i] - inside) + (profile.values[i + 1] - inside)) / contrast;
+  // Area = distance from the edge to the outer end: edge at R - area from the centre.
+  double offset = profile.half_width_px - area;
+  if (!(std::abs(offset) < profile.half_width_px)) return std::nullopt;
+  return offset;
+}
+
+// Homogeneous line a x + b y + c = 0 through points by total least squares,
+// Huber-weighted so a few bad samples (a speck, the post's shadow) do not pull it.
+std::optional<cv::Vec3d> fitLine(const std::vector<cv::Point2d>& points) {
+  if (points.size() < 4) return std::nullopt;
+  std::vector<cv::Point2f> as_float;  // fitLine wants float; coordinates < 1e4 keep ~1e-3 px, centred below
+  cv::Point2d mean(0, 0);
+  for (const cv::Point2d& p : points) mean += p;
+  mean *= 1.0 / static_cast<double>(points.size());
+  for (const cv::Point2d& p : points) as_float.emplace_back(static_cast<float>(p.x - mean.x), static_cast<float>(p.y - mean.y));
+  cv::Vec4f line;
+  cv::fitLine(as_float, line, cv::DIST_HUBER, 0.0, 1e-4, 1e-4);
+  double dx = line[0], dy = line[1];
+  double px = line[2] + mean.x, py = line[3] + mean.y;
+  cv::Vec3d l(-dy, dx, dy * px - dx * py);
+  if (!std::isfinite(l[0]) || !std::isfinite(l[2])) return std::nullopt;
+  return l;
+}
+
+}  // namespace
+
+std::optional<RefinedTagCorners> refineTagCorners(const std::uint8_t* luma, int width, int height, int stride_bytes,
+                                                  const std::array<glm::dvec2, 4>& corners_px,
+                                                  const CameraIntrinsics& camera, int border_width_cells,
+                                                  const CornerRefineSettings& settings) {
+  if (!luma || width < 4 || height < 4 || stride_bytes < width || border_width_cells < 3) return std::nullopt;
+  try {
+    Lens lens(camera);
+    LinearImage image(luma, width, height, stride_bytes);
+    std::vector<cv::Point2d> corners_cv;
+    for (const glm::dvec2& c : corners_px) corners_cv.push_back(toCv(c));
+    std::vector<cv::Point2d> corners_u = lens.undistort(corners_cv);  // undistorted pixels
+
+    std::array<double, 4> edge_contrast{};  // outside - inside of each outer edge, last pass
+    std::array<std::vector<cv::Point2d>, 4> outer_points_u;  // the last pass's edge points, undistorted
+    double outward_sign = 1.0;
+    for (int pass = 0; pass < std::max(1, settings.passes); ++pass) {
+      // Orientation: the quad's signed area tells which side of each edge is
+      // outside, whatever the winding in the image.
+      double signed_area = 0.0;
+      for (std::size_t k = 0; k < 4; ++k) signed_area += corners_u[k].cross(corners_u[(k + 1) % 4]);
+      if (!(std::abs(signed_area) > 16.0)) return std::nullopt;
+      // Positive area: the interior lies left of each edge, so outward is (dy, -dx).
+      outward_sign = signed_area > 0 ? 1.0 : -1.0;
+
+      std::array<cv::Vec3d, 4> lines;
+      for (std::size_t k = 0; k < 4; ++k) {
+        glm::dvec2 a = toGlm(corners_u[k]), b = toGlm(corners_u[(k + 1) % 4]);
+        glm::dvec2 opposite_a = toGlm(corners_u[(k + 3) % 4]), opposite_b = toGlm(corners_u[(k + 2) % 4]);
+        double length = glm::length(b - a);
+        if (!(length > 8.0)) return std::nullopt;
+        glm::dvec2 along = (b - a) / length;
+        glm::dvec2 outward = outward_sign * glm::dvec2(along.y, -along.x);
+        // Half the window: half a border cell, so the window holds only the
+        // black border inside and the white margin (one cell) outside. The
+        // cell is measured along the normal at each end of the edge (the
+        // view's perspective shrinks it toward the far side).
+        auto cellAcross = [&](double t) {
+          glm::dvec2 on_edge = a + t * (b - a);
+          glm::dvec2 across = (opposite_a + t * (opposite_b - opposite_a)) - on_edge;
+          return std::abs(glm::dot(across, outward)) / border_width_cells;
+        };
+        // Samples: one per pixel along the edge (each adds independent noise
+        // and a new sub-pixel phase), up to 256, kept from the corners by a
+        // window and a pixel and a half so the other edge never enters it.
+        int count = std::clamp(static_cast<int>(length), 8, 256);
+        std::vector<cv::Point2d> centres_u, probes_u;
+        std::vector<double> half_widths;
+        for (int i = 0; i < count; ++i) {
+          double t = (i + 0.5) / count;
+          double half_width = std::min(0.5 * cellAcross(t), 4.0);
+          double keep_off = (half_width + 1.5) / length;
+          if (half_width < 1.0 || t < keep_off || t > 1.0 - keep_off) continue;
+          glm::dvec2 centre = a + t * (b - a);
+          centres_u.push_back(toCv(centre));
+          probes_u.push_back(toCv(centre + outward));  // 1 px outward: gives the normal's direction in the frame
+          half_widths.push_back(half_width);
+        }
+        std::vector<cv::Point2d> centres_d = lens.distort(centres_u), probes_d = lens.distort(probes_u);
+        std::vector<EdgeProfile> profiles;
+        for (std::size_t i = 0; i < centres_d.size(); ++i) {
+          glm::dvec2 centre = toGlm(centres_d[i]);
+          glm::dvec2 normal = toGlm(probes_d[i]) - centre;
+          double scale = glm::length(normal);
+          if (!(scale > 0.1)) continue;
+          normal /= scale;
+          if (auto profile = sampleProfile(image, centre, normal, half_widths[i] * scale)) profiles.push_back(std::move(*profile));
+        }
+        // Plateau levels averaged over neighbouring profiles along the edge:
+        // the area rule multiplies a level's error by the window's width, so
+        // a single profile's few end samples would carry most of its noise.
+        // The tag's black and white vary slowly along an edge (lighting), so
+        // a +-kNeighbours window keeps them local.
+        constexpr int kNeighbours = 4;
+        std::vector<cv::Point2d> edge_d;
+        double contrast_sum = 0.0;
+        for (const EdgeProfile& profile : profiles) contrast_sum += profile.outside - profile.inside;
+        edge_contrast[k] = profiles.empty() ? 0.0 : contrast_sum / static_cast<double>(profiles.size());
+        for (std::size_t i = 0; i < profiles.size(); ++i) {
+          std::size_t first = i >= kNeighbours ? i - kNeighbours : 0;
+          std::size_t last = std::min(profiles.size() - 1, i + kNeighbours);
+          double inside = 0.0, outside = 0.0;
+          for (std::size_t j = first; j <= last; ++j) {
+            inside += profiles[j].inside;
+            outside += profiles[j].outside;
+          }
+          inside /= static_cast<double>(last - first + 1);
+          outside /= static_cast<double>(last - first + 1);
+          if (auto offset = edgeOffset(profiles[i], inside, outside))
+            edge_d.push_back(toCv(profiles[i].centre + *offset * profiles[i].outward));
+        }
+        // Fewer than half the samples usable: the edge is occluded or washed out.
+        if (edge_d.size() < std::max<std::size_t>(4, centres_d.size() / 2)) return std::nullopt;
+        outer_points_u[k] = lens.undistort(edge_d);
+        std::optional<cv::Vec3d> line = fitLine(outer_points_u[k]);
+        if (!line) return std::nullopt;
+        lines[k] = *line;
+      }
+      // Corner k lies on edge k-1 (corner k-1 -> k) and edge k (k -> k+1).
+      std::vector<cv::Point2d> refined_u;
+      for (std::size_t k = 0; k < 4; ++k) {
+        cv::Vec3d x = lines[(k + 3) % 4].cross(lines[k]);
+        if (!(std::abs(x[2]) > 1e-12)) return std::nullopt;
+        refined_u.emplace_back(x[0] / x[2], x[1] / x[2]);
+      }
+      corners_u = refined_u;
+    }
+    std::vector<cv::Point2d> refined_d = lens.distort(corners_u);
+    RefinedTagCorners refined;
+    for (std::size_t k = 0; k < 4; ++k) {
+      refined.corners_px[k] = toGlm(refined_d[k]);
+      if (!std::isfinite(refined.corners_px[k].x) || !std::isfinite(refined.corners_px[k].y) ||
+          !(glm::length(refined.corners_px[k] - corners_px[k]) <= settings.max_shift_px))
+        return std::nullopt;
+    }
+
+    // Every cell boundary of the tag's grid (the border's inner edge and the
+    // bit cells'), found without knowing the code: a boundary between cells
+    // of different colour is a step at least half as strong as the outer
+    // edge's, one between equal cells has none and is skipped. Each step is
+    // at a known place on the tag, so it constrains the pose as the outer
+    // edges do, from other positions and at other sub-pixel phases, which
+    // averages out the edge errors that are constant along one straight edge
+    // (sampling of an edge nearly parallel to the pixel grid).
+    const std::array<cv::Point2f, 4> unit{cv::Point2f(-1, -1), cv::Point2f(1, -1), cv::Point2f(1, 1), cv::Point2f(-1, 1)};
+    std::array<cv::Point2f, 4> quad;
+    for (std::size_t k = 0; k < 4; ++k) quad[k] = cv::Point2f(static_cast<float>(corners_u[k].x), static_cast<float>(corners_u[k].y));
+    cv::Matx33d H = cv::getPerspectiveTransform(unit.data(), quad.data());
+    auto map = [&](glm::dvec2 q) {
+      cv::Vec3d h = H * cv::Vec3d(q.x, q.y, 1.0);
+      return glm::dvec2(h[0] / h[2], h[1] / h[2]);
+    };
+    double outer_contrast = 0.0;
+    for (double c : edge_contrast) outer_contrast += std::abs(c) / 4.0;
+    const int cells = border_width_cells;
+    const double cell = 2.0 / cells;  // in unit tag coordinates
+    for (int direction = 0; direction < 2; ++direction) {
+      for (int j = 1; j < cells; ++j) {
+        for (int m = 0; m < cells; ++m) {
+          // Segment from qa to qb along one grid line, between cell m's ends.
+          double line = -1.0 + j * cell, from = -1.0 + m * cell, to = from + cell;
+          glm::dvec2 qa = direction == 0 ? glm::dvec2(line, from) : glm::dvec2(from, line);
+          glm::dvec2 qb = direction == 0 ? glm::dvec2(line, to) : glm::dvec2(to, line);
+          glm::dvec2 across_q = direction == 0 ? glm::dvec2(cell, 0.0) : glm::dvec2(0.0, cell);
+          glm::dvec2 a = map(qa), b = map(qb);
+          double length = glm::length(b - a);
+          if (!(length > 4.0)) continue;
+          glm::dvec2 along = (b - a) / length;
+          glm::dvec2 normal(along.y, -along.x);
+          glm::dvec2 mid_q = 0.5 * (qa + qb);
+          double cell_across = std::min(std::abs(glm::dot(map(mid_q + across_q) - map(mid_q), normal)),
+                                        std::abs(glm::dot(map(mid_q - across_q) - map(mid_q), normal)));
+          // Half a cell each side, at most 3 px (the anti-aliasing ramp is
+          // about +-1 px); a pixel and a half from the ends plus half the
+          // window keeps the cells beyond the ends out of the profiles.
+          double half_width = std::min(0.5 * cell_across, 3.0);
+          double keep_off = 1.5 + 0.5 * half_width;
+          if (half_width < 1.0 || length < 2.0 * keep_off + 1.0) continue;
+          int count = std::max(1, static_cast<int>(length - 2.0 * keep_off));
+          std::vector<cv::Point2d> centres_u, probes_u;
+          for (int i = 0; i < count; ++i) {
+            double d = keep_off + (i + 0.5) * (length - 2.0 * keep_off) / count;
+            glm::dvec2 centre = a + d * along;
+            centres_u.push_back(toCv(centre));
+            probes_u.push_back(toCv(centre + normal));
+          }
+          std::vector<cv::Point2d> centres_d = lens.distort(centres_u), probes_d = lens.distort(probes_u);
+          std::vector<EdgeProfile> profiles;
+          for (std::size_t i = 0; i < centres_d.size(); ++i) {
+            glm::dvec2 centre = toGlm(centres_d[i]);
+            glm::dvec2 n = toGlm(probes_d[i]) - centre;
+            double scale = glm::length(n);
+            if (!(scale > 0.1)) continue;
+            if (auto profile = sampleProfile(image, centre, n / scale, half_width * scale)) profiles.push_back(std::move(*profile));
+          }
+          if (profiles.empty()) continue;
+          // Both sides of one segment are single cells: one pair of levels.
+          double inside = 0.0, outside = 0.0;
+          for (const EdgeProfile& profile : profiles) {
+            inside += profile.inside / profiles.size();
+            outside += profile.outside / profiles.size();
+          }
+          if (!(std::abs(outside - inside) > 0.5 * outer_contrast)) continue;
+          std::vector<cv::Point2d> found_d;
+          for (const EdgeProfile& profile : profiles)
+            if (auto offset = edgeOffset(profile, inside, outside)) found_d.push_back(toCv(profile.centre + *offset * profile.outward));
+          std::vector<cv::Point2d> found_u = lens.undistort(found_d);
+          for (const cv::Point2d& p : found_u) refined.edge_points.push_back({toGlm(p), qa, qb});
+        }
+      }
+    }
+    for (std::size_t k = 0; k < 4; ++k)
+      for (const cv::Point2d& p : outer_points_u[k])
+        refined.edge_points.push_back({toGlm(p), glm::dvec2(unit[k].x, unit[k].y),
+                                       glm::dvec2(unit[(k + 1) % 4].x, unit[(k + 1) % 4].y)});
+    return refined;
+  } catch (const cv::Exception&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace probelight::tracking
