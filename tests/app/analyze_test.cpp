@@ -20,6 +20,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "binary_test_support.hpp"
 #include "app/analyze.hpp"
 #include "config/camera_file.hpp"
 #include "ibl/color_transfer.hpp"
@@ -35,10 +36,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandResult {
-  int exit_status = -1;
-  std::string stderr_text;
-};
+using testing::CommandResult;
 
 double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
 
@@ -46,38 +44,9 @@ glm::dvec3 jsonVec3(const nlohmann::json& value) {
   return glm::dvec3(value.at(0).get<double>(), value.at(1).get<double>(), value.at(2).get<double>());
 }
 
-class Analyze : public ::testing::Test {
+class Analyze : public testing::BinaryTest {
  protected:
-  void SetUp() override {
-    std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    std::replace(name.begin(), name.end(), '/', '_');
-    dir_ = fs::temp_directory_path() / ("probelight_analyze_" + std::to_string(getpid()) + "_" + name);
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  // PROBELIGHT_KEEP_TEST_DIRS=1 keeps the inputs and outputs (frame.png,
-  // camera.yaml, rig.yaml, out/) for a person to look at; README's example
-  // pictures were made this way.
-  void TearDown() override {
-    if (std::getenv("PROBELIGHT_KEEP_TEST_DIRS")) {
-      std::cout << "[ kept     ] " << dir_.string() << "\n";
-      return;
-    }
-    if (!HasFailure()) fs::remove_all(dir_);
-  }
-
-  CommandResult run(const std::string& args) const {
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string command = std::string(PROBELIGHT_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(err);
-    std::stringstream text;
-    text << in.rdbuf();
-    result.stderr_text = text.str();
-    return result;
-  }
+  Analyze() : BinaryTest("analyze") {}
 
   // Writes frame.png (RGB -> BGR for imwrite), camera.yaml and rig.yaml for
   // the scene; `crop` keeps only part of the frame, and camera.yaml says so
@@ -106,8 +75,6 @@ class Analyze : public ::testing::Test {
     std::ifstream in(dir_ / "out" / "analysis.json");
     return nlohmann::json::parse(in);  // throws, failing the test, on a malformed file
   }
-
-  fs::path dir_;
 };
 
 // Every number in the value is finite (the writer would turn NaN into null,

@@ -20,6 +20,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "binary_test_support.hpp"
 #include "config/camera_file.hpp"
 #include "config/rig_file.hpp"
 #include "ibl/camera_projection.hpp"
@@ -32,47 +33,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandResult {
-  int exit_status = -1;
-  std::string stderr_text;
-};
+using testing::CommandResult;
 
-class Stress : public ::testing::Test {
+class Stress : public testing::BinaryTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("probelight_stress_" + std::to_string(getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
-  }
+  Stress() : BinaryTest("stress") {}
 
-  CommandResult run(const std::string& args) const {
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string command = std::string(PROBELIGHT_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(err);
-    std::stringstream text;
-    text << in.rdbuf();
-    result.stderr_text = text.str();
-    return result;
-  }
-
-  nlohmann::json readReport(const fs::path& out) const {
-    std::ifstream in(out / "report.json");
-    return nlohmann::json::parse(in);
-  }
 
   void writeText(const fs::path& path, const std::string& text) const {
     std::ofstream out(path);
     out << text;
   }
-
-  fs::path dir_;
 };
 
 // Every number in the report finite, and nothing null (a null is our
