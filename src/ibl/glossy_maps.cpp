@@ -50,21 +50,10 @@ Taps makeTaps(double exponent, int half_taps, double power) {
   return taps;
 }
 
-// (premultiplied radiance, validity) sampled together.
-struct Weighted {
-  CubeMapRGB premultiplied;
-  CubeMapRGB validity;  // same value in r, g, b
-};
-
-glm::dvec4 sample(const Weighted& cube, const glm::dvec3& direction) {
-  return glm::dvec4(glm::dvec3(cube.premultiplied.sampleBilinear(direction)),
-                    cube.validity.sampleBilinear(direction).r);
-}
-
 // The east integral through d along tangent t: sum_i w_i cube(cos a_i d + sin a_i t) / sum w.
-glm::dvec4 eastIntegral(const Weighted& cube, const Taps& taps, const glm::dvec3& d, const glm::dvec3& t) {
+glm::dvec4 eastIntegral(const ValidityWeightedCube& cube, const Taps& taps, const glm::dvec3& d, const glm::dvec3& t) {
   glm::dvec4 sum(0.0);
-  for (size_t i = 0; i < taps.angle.size(); ++i) sum += taps.weight[i] * sample(cube, taps.cosine[i] * d + taps.sine[i] * t);
+  for (size_t i = 0; i < taps.angle.size(); ++i) sum += taps.weight[i] * cube.sample(taps.cosine[i] * d + taps.sine[i] * t);
   return sum / taps.weight_sum;
 }
 
@@ -72,21 +61,12 @@ glm::dvec4 eastIntegral(const Weighted& cube, const Taps& taps, const glm::dvec3
 
 CubeMapRGB glossyMap(const CubeMapRGB& radiance, const GlossyLevelSettings& settings,
                      const std::vector<float>* validity, std::vector<float>* coverage) {
-  Weighted source{radiance, CubeMapRGB(radiance.face_size)};
-  for (int face = 0; face < kCubeFaceCount; ++face) {
-    for (size_t i = 0; i < radiance.faces[face].size(); ++i) {
-      const float weight = validity ? (*validity)[face * radiance.faces[face].size() + i] : 1.0f;
-      source.premultiplied.faces[face][i] = radiance.faces[face][i] * weight;
-      source.validity.faces[face][i] = glm::vec3(weight);
-    }
-  }
-  const int factor = settings.prefilter_face_size > 0 ? radiance.face_size / settings.prefilter_face_size : 1;
-  const Weighted prefiltered{downsampleCubeMap(source.premultiplied, factor), downsampleCubeMap(source.validity, factor)};
+  const ValidityWeightedCube prefiltered = prefilterWithValidity(radiance, validity, settings.prefilter_face_size);
   const Taps east = makeTaps(settings.exponent, settings.half_taps, settings.exponent + 1.0);
   const Taps north = makeTaps(settings.exponent, settings.half_taps, settings.exponent);
 
   const int m = settings.intermediate_face_size;
-  Weighted intermediate{CubeMapRGB(m), CubeMapRGB(m)};
+  ValidityWeightedCube intermediate{CubeMapRGB(m), CubeMapRGB(m)};
   for (int face = 0; face < kCubeFaceCount; ++face) {
     for (int y = 0; y < m; ++y) {
       for (int x = 0; x < m; ++x) {
@@ -114,7 +94,7 @@ CubeMapRGB glossyMap(const CubeMapRGB& radiance, const GlossyLevelSettings& sett
           // Near +-Z the intermediate texels were integrated along east
           // circles of every orientation; integrate this tap's own circle.
           const glm::dvec4 inner = std::abs(d.z) > pole_cosine ? eastIntegral(prefiltered, east, d, east_tangent)
-                                                                : sample(intermediate, d);
+                                                                : intermediate.sample(d);
           sum += north.weight[j] * inner;
         }
         sum /= north.weight_sum;

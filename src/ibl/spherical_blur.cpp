@@ -84,22 +84,28 @@ CubeMapRGB downsampleCubeMap(const CubeMapRGB& input, int factor) {
   return output;
 }
 
-namespace {
-
-// A cube map with validity carried in a fourth channel, premultiplied: the
-// passes below are the same weighted sums for rgb and for validity.
-struct WeightedCube {
-  CubeMapRGB premultiplied;
-  CubeMapRGB validity;  // same value in r, g, b
-};
-
-glm::dvec4 sampleWeighted(const WeightedCube& cube, const glm::dvec3& direction) {
-  return glm::dvec4(glm::dvec3(cube.premultiplied.sampleBilinear(direction)),
-                    cube.validity.sampleBilinear(direction).r);
+glm::dvec4 ValidityWeightedCube::sample(const glm::dvec3& direction) const {
+  return glm::dvec4(glm::dvec3(premultiplied.sampleBilinear(direction)), validity.sampleBilinear(direction).r);
 }
 
+ValidityWeightedCube prefilterWithValidity(const CubeMapRGB& radiance, const std::vector<float>* validity,
+                                           int prefilter_face_size) {
+  ValidityWeightedCube source{radiance, CubeMapRGB(radiance.face_size)};
+  for (int face = 0; face < kCubeFaceCount; ++face) {
+    for (size_t i = 0; i < radiance.faces[face].size(); ++i) {
+      const float weight = validity ? (*validity)[face * radiance.faces[face].size() + i] : 1.0f;
+      source.premultiplied.faces[face][i] = radiance.faces[face][i] * weight;
+      source.validity.faces[face][i] = glm::vec3(weight);
+    }
+  }
+  const int factor = prefilter_face_size > 0 ? radiance.face_size / prefilter_face_size : 1;
+  return {downsampleCubeMap(source.premultiplied, factor), downsampleCubeMap(source.validity, factor)};
+}
+
+namespace {
+
 // One cosine pass over (premultiplied radiance, validity).
-WeightedCube weightedPass(const WeightedCube& input, int output_face_size, const SphericalBlurPass& pass) {
+ValidityWeightedCube weightedPass(const ValidityWeightedCube& input, int output_face_size, const SphericalBlurPass& pass) {
   return {sphericalBlurPass(input.premultiplied, output_face_size, pass),
           sphericalBlurPass(input.validity, output_face_size, pass)};
 }
@@ -108,21 +114,11 @@ WeightedCube weightedPass(const WeightedCube& input, int output_face_size, const
 
 CubeMapRGB irradianceOverPiByCosinePasses(const CubeMapRGB& radiance, const CosineIrradianceSettings& settings,
                                           const std::vector<float>* validity) {
-  WeightedCube source{radiance, CubeMapRGB(radiance.face_size)};
-  for (int face = 0; face < kCubeFaceCount; ++face) {
-    for (size_t i = 0; i < radiance.faces[face].size(); ++i) {
-      const float weight = validity ? (*validity)[face * radiance.faces[face].size() + i] : 1.0f;
-      source.premultiplied.faces[face][i] = radiance.faces[face][i] * weight;
-      source.validity.faces[face][i] = glm::vec3(weight);
-    }
-  }
-  const int factor = settings.prefilter_face_size > 0 ? radiance.face_size / settings.prefilter_face_size : 1;
-  const WeightedCube prefiltered{downsampleCubeMap(source.premultiplied, factor),
-                                 downsampleCubeMap(source.validity, factor)};
+  const ValidityWeightedCube prefiltered = prefilterWithValidity(radiance, validity, settings.prefilter_face_size);
 
   const SphericalBlurPass east{BlurAxis::kEast, 0.0, settings.half_taps, BlurKernel::kCosineSquared};
   const SphericalBlurPass north{BlurAxis::kNorth, 0.0, settings.half_taps, BlurKernel::kCosine};
-  const WeightedCube intermediate = weightedPass(prefiltered, settings.intermediate_face_size, east);
+  const ValidityWeightedCube intermediate = weightedPass(prefiltered, settings.intermediate_face_size, east);
 
   const int tap_count = 2 * settings.half_taps + 1;
   std::vector<double> east_angle(tap_count), east_weight(tap_count), north_angle(tap_count), north_weight(tap_count);
@@ -151,10 +147,10 @@ CubeMapRGB irradianceOverPiByCosinePasses(const CubeMapRGB& radiance, const Cosi
           if (std::abs(d.z) > pole_cosine) {
             for (int i = 0; i < tap_count; ++i)
               inner += east_weight[i] *
-                       sampleWeighted(prefiltered, std::cos(east_angle[i]) * d + std::sin(east_angle[i]) * east_tangent);
+                       prefiltered.sample(std::cos(east_angle[i]) * d + std::sin(east_angle[i]) * east_tangent);
             inner /= east_weight_sum;
           } else {
-            inner = sampleWeighted(intermediate, d);
+            inner = intermediate.sample(d);
           }
           sum += north_weight[j] * inner;
           weight_sum += north_weight[j];

@@ -74,6 +74,22 @@ CubeMapRGB downsampleCubeMap(const CubeMapRGB& input, int factor);
 //    alpha and divided out at the end (normalised convolution), so the blind
 //    spot is filled with the weighted mean of what the ball saw nearby
 //    instead of darkening the normals that face it.
+// A cube map with validity carried beside it and the radiance premultiplied
+// by it, so every pass is the same weighted sum for both and the final
+// division (normalised convolution) fills what the ball did not see.
+struct ValidityWeightedCube {
+  CubeMapRGB premultiplied;
+  CubeMapRGB validity;  // same value in r, g, b
+  // (premultiplied rgb, validity), both sampled bilinearly.
+  glm::dvec4 sample(const glm::dvec3& direction) const;
+};
+
+// Premultiplies `radiance` by `validity` (all 1 when null; laid out like
+// CubeMapRGB::faces) and shrinks both to prefilter_face_size with
+// downsampleCubeMap.
+ValidityWeightedCube prefilterWithValidity(const CubeMapRGB& radiance, const std::vector<float>* validity,
+                                           int prefilter_face_size);
+
 struct CosineIrradianceSettings {
   int prefilter_face_size = 16;
   int intermediate_face_size = 32;
