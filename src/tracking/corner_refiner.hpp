@@ -15,7 +15,7 @@
 //   for a step from level w (outside) to b (inside) at offset e, blurred by
 //   any kernel of unit area that fits inside the window [-R, R],
 //   integral((L(s) - b) / (w - b)) ds = e + R exactly. This holds for the
-//   pixel box (and the simulator's 2x2 supersampling) and for lens blur alike,
+//   pixel box (and the simulator's area-integrated edge pixels) and for lens blur alike,
 //   symmetric or not;
 // - the samples along each edge are undistorted, so the line fit is exact for
 //   a pinhole camera after the lens model; corners = intersections of
