@@ -233,12 +233,25 @@ class Analyzer {
       timings_[run]["detect_pose"] = msSince(start);
     }
     if (!track_.found) {
-      result_.fail(kAnalyzeNotFoundExitStatus, "no tag: " + track_.status);
+      // A single frame has no history, so a tag cut by the frame edge reads
+      // as no tag: the message says so.
+      std::string message = track_.status;
+      if (track_.status_code == tracking::TagTrackStatus::kNoTag)
+        message += " (a tag partly outside the frame cannot be found)";
+      result_.json["tag"] = {{"status", tracking::toString(track_.status_code)},
+                             {"message", message},
+                             {"family", rig_.tag_family},
+                             {"wanted_id", rig_.tag_id},
+                             {"ids_in_view", track_.ids_in_view}};
+      result_.fail(kAnalyzeNotFoundExitStatus, "no tag: " + message);
       return;
     }
     Json corners = Json::array();
     for (const glm::dvec2& corner : track_.corners_px) corners.push_back(vec2Json(corner));
-    result_.json["tag"] = {{"family", rig_.tag_family},
+    result_.json["tag"] = {{"status", tracking::toString(track_.status_code)},
+                           {"message", track_.status},
+                           {"family", rig_.tag_family},
+                           {"ids_in_view", track_.ids_in_view},
                            {"id", track_.id},
                            {"corners_px", corners},
                            {"decision_margin", track_.decision_margin},

@@ -52,6 +52,15 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.tracking.threads = tracking.readInt("threads", settings.tracking.threads, Range::closed(1, 16));
   settings.tracking.quad_sigma = tracking.readDouble("quad_sigma", settings.tracking.quad_sigma, Range::closed(0.0, 5.0));
   settings.tracking.refine_edges = tracking.readBool("refine_edges", settings.tracking.refine_edges);
+  settings.tracking.refine_corners = tracking.readBool("refine_corners", settings.tracking.refine_corners);
+  ConfigReader smoothing = tracking.section("smoothing");
+  tracking::PoseSmoothingSettings& smooth = settings.tracking.smoothing;
+  smooth.enabled = smoothing.readBool("enabled", smooth.enabled);
+  smooth.static_cutoff_hz = smoothing.readDouble("static_cutoff_hz", smooth.static_cutoff_hz, Range::openClosed(0.0, 1000.0));
+  smooth.max_lag_px = smoothing.readDouble("max_lag_px", smooth.max_lag_px, Range::openClosed(0.0, 100.0));
+  smooth.speed_cutoff_hz = smoothing.readDouble("speed_cutoff_hz", smooth.speed_cutoff_hz, Range::openClosed(0.0, 1000.0));
+  smooth.reset_jump_px = smoothing.readDouble("reset_jump_px", smooth.reset_jump_px, Range::openClosed(0.0, 10000.0));
+  smoothing.rejectUnknownFields();
   tracking.rejectUnknownFields();
 
   ConfigReader object = file.section("object");

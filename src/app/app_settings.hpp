@@ -9,6 +9,7 @@
 #include "app/lighting_state_machine.hpp"
 #include "app/map_update_policy.hpp"
 #include "pipeline/environment_maps.hpp"
+#include "tracking/pose_smoother.hpp"
 
 namespace probelight {
 
@@ -29,6 +30,8 @@ struct TrackingConfig {
   int threads = 2;
   double quad_sigma = 0.0;
   bool refine_edges = true;
+  bool refine_corners = true;  // full-resolution linear-light edge fit (tracking/corner_refiner.hpp)
+  tracking::PoseSmoothingSettings smoothing;  // tracking/pose_smoother.hpp
 };
 
 struct ObjectConfig {

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <sstream>
 
 #include <GLES2/gl2.h>
@@ -34,6 +35,7 @@
 #include "pipeline/environment_maps.hpp"
 #include "pipeline/object_compositor.hpp"
 #include "sim/world.hpp"
+#include "tracking/pose_smoother.hpp"
 #include "tracking/tag_tracker.hpp"
 
 namespace probelight {
@@ -119,9 +121,18 @@ LoadedInputs loadInputs(const RunOptions& options) {
 }
 
 // Errors against the simulator's truth for one frame.
+// `unsmoothed_pose`: the tracker's own pose when smoothing replaced it in `track`.
 void measureAgainstTruth(const FrameTruth& truth, const tracking::TagTrackResult& track,
-                         const ibl::ProbeOutline* outline, RunReport& report) {
+                         const ibl::ProbeOutline* outline, const std::optional<ibl::MirrorBallView>& unsmoothed_view,
+                         RunReport& report) {
   if (!track.found) return;
+  if (unsmoothed_view) {
+    report.recordAccuracy("pose_rotation_error_deg_unsmoothed",
+                          rotationErrorDeg(unsmoothed_view->pose.R_cam_from_world, truth.pose.R_cam_from_world));
+    const ibl::ProbeOutline raw_outline = ibl::computeProbeOutline(*unsmoothed_view);
+    if (raw_outline.valid && truth.probe_radius_px > 0.0)
+      report.recordAccuracy("probe_center_error_px_unsmoothed", glm::length(raw_outline.center_px - truth.probe_center_px));
+  }
   report.recordAccuracy("pose_rotation_error_deg", rotationErrorDeg(track.pose.R_cam_from_world,
                                                                     truth.pose.R_cam_from_world));
   const double distance = glm::length(truth.pose.t_cam_from_world);
@@ -228,6 +239,8 @@ class Kiosk {
     try {
       tracker_ = std::make_unique<tracking::TagTracker>(tagDetectorSettings(settings, inputs_.rig), inputs_.rig,
                                                         inputs_.camera);
+      smoother_ = std::make_unique<tracking::PoseSmoother>(settings.tracking.smoothing, inputs_.camera,
+                                                           tracking::smoothingReferencePoints(inputs_.rig));
     } catch (const std::invalid_argument& bad_setting) {
       return fail(2, std::string("tracking: ") + bad_setting.what());
     }
@@ -358,6 +371,12 @@ class Kiosk {
       tracking::rgbToLuma(frame.rgb, luma_);
       track = tracker_->track(luma_.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
     }
+    // Everything downstream (ball crop, maps, object) uses the smoothed pose.
+    std::optional<ibl::MirrorBallView> unsmoothed_view;
+    if (track.found && inputs_.settings.tracking.smoothing.enabled) {
+      unsmoothed_view = ibl::MirrorBallView{camera, track.pose, rig.probe_center_w, rig.probe_radius_m};
+      track.pose = smoother_->update(track.pose, static_cast<double>(frame.metadata.timestamp_ns) * 1e-9);
+    }
 
     // Stages 2-3: the maps, rebuilt only from a frame that shows the whole
     // ball, with a steady camera, and an image that says something new
@@ -365,9 +384,14 @@ class Kiosk {
     const ibl::MirrorBallView view{camera, track.pose, rig.probe_center_w, rig.probe_radius_m};
     ibl::ProbeOutline outline;
     std::string status;
+    tag_status_frames_[tracking::toString(track.status_code)] += 1;
     if (!track.found) {
       report_.count("frames_without_tag");
-      status = "No tag in view: " + track.status;
+      status = (track.status_code == tracking::TagTrackStatus::kNoTag ? "No tag in view: " : "Tag not usable: ") +
+               track.status;
+      last_tag_problem_ = {{"frame", frame_number},
+                           {"status", tracking::toString(track.status_code)},
+                           {"message", track.status}};
     } else {
       outline = ibl::computeProbeOutline(view);
     }
@@ -428,7 +452,7 @@ class Kiosk {
       } else {
         previous_truth_center_px_.reset();
       }
-      measureAgainstTruth(*frame.metadata.truth, track, track.found ? &outline : nullptr, report_);
+      measureAgainstTruth(*frame.metadata.truth, track, track.found ? &outline : nullptr, unsmoothed_view, report_);
       // Whatever the maps hold now, updated this frame or kept, against the
       // truth now: a map kept too long (a lamp switched on) shows here.
       if (world_ && have_maps_ && maps_view_ && frame_number % kTruthCheckEveryFrames == 0) {
@@ -568,6 +592,8 @@ class Kiosk {
     report_.extra["state_at_end"] = toString(machine_.state());
     report_.extra["map_storage"] = maps_.storageDescription();
     report_.extra["map_updates"] = mapUpdatesJson();
+    // Frames per tracking status, and the last frame the tag was not usable.
+    report_.extra["tag_status"] = {{"frames", tag_status_frames_}, {"last_problem", last_tag_problem_}};
     const nlohmann::json json = report_.toJson(static_cast<long long>(frames_done_), elapsed_s);
     const std::filesystem::path report_path = std::filesystem::path(options_.out_dir) / "report.json";
     std::ofstream out(report_path);
@@ -606,6 +632,9 @@ class Kiosk {
   pipeline::EnvironmentMaps maps_;
   pipeline::ObjectCompositor compositor_;
   std::unique_ptr<tracking::TagTracker> tracker_;
+  std::unique_ptr<tracking::PoseSmoother> smoother_;
+  std::map<std::string, long long> tag_status_frames_;
+  nlohmann::json last_tag_problem_;  // null until a frame's tag is not usable
   std::unique_ptr<ButtonSource> button_;
 
   ibl::SurfaceMaterial material_;

@@ -11,6 +11,7 @@ tracking::TagDetectorSettings tagDetectorSettings(const AppSettings& settings, c
   detector.nthreads = settings.tracking.threads;
   detector.quad_sigma = static_cast<float>(settings.tracking.quad_sigma);
   detector.refine_edges = settings.tracking.refine_edges;
+  detector.refine_corners = settings.tracking.refine_corners;
   return detector;
 }
 

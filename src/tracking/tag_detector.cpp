@@ -74,6 +74,7 @@ int TagDetector::minimumFrameSizePx() const {
 }
 
 int TagDetector::borderWidthCells() const { return family_ ? family_->width_at_border : 0; }
+int TagDetector::totalWidthCells() const { return family_ ? family_->total_width : 0; }
 
 std::vector<TagDetection> TagDetector::detect(const std::uint8_t* luma, int width, int height, int stride_bytes) {
   std::vector<TagDetection> found;

@@ -97,6 +97,8 @@ class TagDetector {
   int minimumFrameSizePx() const;
   // The family's width_at_border: the detected quad's side in bit cells.
   int borderWidthCells() const;
+  // The family's total_width: the printed image's side in cells, white ring included.
+  int totalWidthCells() const;
 
  private:
   TagDetectorSettings settings_;

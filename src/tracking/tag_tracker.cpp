@@ -31,10 +31,32 @@ glm::dmat3 toGlm(const cv::Matx33d& m) {
   return result;
 }
 
-std::string describeIds(const std::vector<TagDetection>& detections) {
-  std::string ids;
-  for (const TagDetection& detection : detections) ids += (ids.empty() ? "" : ", ") + std::to_string(detection.id);
-  return ids;
+std::string describeIds(const std::vector<int>& ids) {
+  std::string text;
+  for (int id : ids) text += (text.empty() ? "" : ", ") + std::to_string(id);
+  return text;
+}
+
+// The printed tag's corners (white ring included) in the frame for `pose`;
+// nullopt when one lies behind the camera or OpenCV fails.
+std::optional<std::array<glm::dvec2, 4>> printedCornersPx(const PoseCamFromWorld& pose, double printed_size_m,
+                                                          const CameraIntrinsics& camera) {
+  try {
+    std::vector<cv::Point3d> camera_points;
+    for (const glm::dvec3& p : tagCornersWorld(printed_size_m)) {
+      glm::dvec3 c = pose.toCamera(p);
+      if (!(c.z > 0.0)) return std::nullopt;
+      camera_points.emplace_back(c.x, c.y, c.z);
+    }
+    std::vector<cv::Point2d> image;
+    cv::projectPoints(camera_points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cameraMatrix(camera),
+                      distortionVector(camera), image);
+    std::array<glm::dvec2, 4> corners;
+    for (std::size_t k = 0; k < 4; ++k) corners[k] = glm::dvec2(image[k].x, image[k].y);
+    return corners;
+  } catch (const cv::Exception&) {
+    return std::nullopt;
+  }
 }
 
 }  // namespace
@@ -152,6 +174,19 @@ void refineOnEdgePoints(std::vector<TagPoseSolution>& solutions, const std::arra
 }
 
 }  // namespace
+
+const char* toString(TagTrackStatus status) {
+  switch (status) {
+    case TagTrackStatus::kFound: return "found";
+    case TagTrackStatus::kNoTag: return "no_tag";
+    case TagTrackStatus::kWrongId: return "wrong_id";
+    case TagTrackStatus::kSeveralTags: return "several_tags";
+    case TagTrackStatus::kCutByFrameEdge: return "cut_by_frame_edge";
+    case TagTrackStatus::kPoseFailed: return "pose_failed";
+    case TagTrackStatus::kBadFrame: return "bad_frame";
+  }
+  return "unknown";
+}
 
 std::array<glm::dvec3, 4> tagCornersWorld(double tag_size_m) {
   double h = tag_size_m / 2.0;
@@ -275,14 +310,62 @@ TagTrackResult TagTracker::track(const std::uint8_t* luma, int width, int height
 
   std::vector<TagDetection> detections = detector_.detect(luma, width, height, stride_bytes);
   const TagDetection* chosen = nullptr;
-  for (const TagDetection& detection : detections)
-    if (detection.id == rig_.tag_id && (!chosen || detection.decision_margin > chosen->decision_margin))
+  int with_rig_id = 0;
+  for (const TagDetection& detection : detections) {
+    result.ids_in_view.push_back(detection.id);
+    if (detection.id == rig_.tag_id) {
+      ++with_rig_id;
       chosen = &detection;
+    }
+  }
+  std::sort(result.ids_in_view.begin(), result.ids_in_view.end());
+  ++frames_since_found_;
+  const std::string family = rig_.tag_family;
+  if (with_rig_id > 1) {
+    // Two prints of the rig's tag: a pose from the wrong one would put the
+    // ball's crop somewhere else entirely, so no pose at all is safer.
+    result.status_code = TagTrackStatus::kSeveralTags;
+    result.status = std::to_string(with_rig_id) + " " + family + " tags with the rig's id " +
+                    std::to_string(rig_.tag_id) + " in view: cannot tell which is the rig's; remove the others";
+    return result;
+  }
   if (!chosen) {
-    result.status_code = detections.empty() ? TagTrackStatus::kNoTag : TagTrackStatus::kWrongId;
-    result.status = detections.empty() ? "no " + rig_.tag_family + " tag in view"
-                                       : "wrong id: saw " + rig_.tag_family + " id " + describeIds(detections) +
-                                             ", the rig's tag is id " + std::to_string(rig_.tag_id);
+    if (!detections.empty()) {
+      result.status_code = TagTrackStatus::kWrongId;
+      result.status = "wrong id: saw " + family + " id " + describeIds(result.ids_in_view) + ", the rig's tag is id " +
+                      std::to_string(rig_.tag_id);
+      return result;
+    }
+    result.status_code = TagTrackStatus::kNoTag;
+    result.status = "no " + family + " tag in view";
+    // libapriltag needs the whole black border and some white around it, so
+    // a tag partly out of the frame is not found at all. Where it was a
+    // moment ago tells that apart from a covered or absent tag.
+    if (last_printed_corners_px_ && frames_since_found_ <= kCutByEdgeMemoryFrames) {
+      // Where the corners would be now at the speed they last moved, and
+      // whether that or the last sighting itself (within one printed cell
+      // of the edge: the detector needs the white ring whole) crosses the
+      // frame's edge. Some corners out: cut; all out: gone.
+      const double cell_px = glm::length((*last_printed_corners_px_)[1] - (*last_printed_corners_px_)[0]) /
+                             std::max(1, detector_.totalWidthCells());
+      int outside = 0;
+      for (std::size_t k = 0; k < 4; ++k) {
+        const glm::dvec2 last = (*last_printed_corners_px_)[k];
+        const glm::dvec2 now = last + static_cast<double>(frames_since_found_) * printed_corner_velocity_px_[k];
+        auto out = [&](const glm::dvec2& p, double margin) {
+          return p.x < -0.5 + margin || p.y < -0.5 + margin || p.x > width - 0.5 - margin ||
+                 p.y > height - 0.5 - margin;
+        };
+        if (out(now, 0.0) || out(last, cell_px)) ++outside;
+      }
+      if (outside > 0 && outside < 4) {
+        result.status_code = TagTrackStatus::kCutByFrameEdge;
+        result.status = "tag cut by the frame edge (" + std::to_string(outside) +
+                        " of its corners outside): bring the whole tag into view";
+      } else if (outside == 4) {
+        result.status += " (it left the frame)";
+      }
+    }
     return result;
   }
   result.id = chosen->id;
@@ -324,6 +407,24 @@ TagTrackResult TagTracker::track(const std::uint8_t* luma, int width, int height
   result.pose = solutions[pick].pose;
   result.reprojection_error_px = solutions[pick].reprojection_error_px;
   result.status = "tag " + std::to_string(chosen->id) + " found" + (result.pose_ambiguous ? " (pose ambiguous)" : "");
+  if (detections.size() > 1) {
+    std::vector<int> others;
+    for (int id : result.ids_in_view)
+      if (id != chosen->id) others.push_back(id);
+    result.status += "; other " + family + " tags ignored: id " + describeIds(others);
+  }
+  // For telling a tag that leaves the frame from a missing one (above).
+  if (const int border_cells = detector_.borderWidthCells(); border_cells > 0) {
+    const double printed_size_m = rig_.tag_size_m * detector_.totalWidthCells() / border_cells;
+    if (auto printed = printedCornersPx(result.pose, printed_size_m, camera_)) {
+      for (std::size_t k = 0; k < 4; ++k)
+        printed_corner_velocity_px_[k] = last_printed_corners_px_ && frames_since_found_ == 1
+                                             ? (*printed)[k] - (*last_printed_corners_px_)[k]
+                                             : glm::dvec2(0.0);
+      last_printed_corners_px_ = printed;
+    }
+  }
+  frames_since_found_ = 0;
   return result;
 }
 

@@ -63,13 +63,26 @@ class PoseFlipResolver {
   std::optional<glm::dvec3> reference_normal_cam_;
 };
 
-enum class TagTrackStatus { kFound, kNoTag, kWrongId, kPoseFailed, kBadFrame };
+enum class TagTrackStatus {
+  kFound,
+  kNoTag,            // no tag of the family in view
+  kWrongId,          // tags of the family, none with the rig's id
+  kSeveralTags,      // more than one tag with the rig's id: which is the rig's cannot be told
+  kCutByFrameEdge,   // none found, and the last pose puts part of the printed tag outside the frame
+  kPoseFailed,       // found, but no planar pose fits its corners
+  kBadFrame,         // null, too small or inconsistent frame
+};
+// "found", "no_tag", "wrong_id", "several_tags", "cut_by_frame_edge",
+// "pose_failed", "bad_frame": for report.json and analysis.json.
+const char* toString(TagTrackStatus status);
 
 struct TagTrackResult {
   bool found = false;
   TagTrackStatus status_code = TagTrackStatus::kNoTag;
   std::string status;  // one line for the user: why not found, or what was found
   int id = -1;
+  // Every tag of the family in view, the rig's included (ascending ids).
+  std::vector<int> ids_in_view;
   // Corner k is the image of world corner k (tagCornersWorld), OpenCV pixel
   // convention (pixel centres at integers), distorted as in the frame.
   std::array<glm::dvec2, 4> corners_px{};
@@ -102,7 +115,10 @@ class TagTracker {
   TagTrackResult track(const std::uint8_t* luma, int width, int height, int stride_bytes);
 
   // Forget the pose history (e.g. after the camera was moved by hand).
-  void resetHistory() { flip_resolver_.reset(); }
+  void resetHistory() {
+    flip_resolver_.reset();
+    last_printed_corners_px_.reset();
+  }
 
   const RigGeometry& rig() const { return rig_; }
   const CameraIntrinsics& camera() const { return camera_; }
@@ -113,7 +129,18 @@ class TagTracker {
   RigGeometry rig_;
   CameraIntrinsics camera_;
   PoseFlipResolver flip_resolver_;
+  // Where the printed tag (white ring included) was when last found, how
+  // fast its corners moved then (px per frame), and how many frames ago: to
+  // tell a tag that is leaving the frame from one that is simply absent.
+  std::optional<std::array<glm::dvec2, 4>> last_printed_corners_px_;
+  std::array<glm::dvec2, 4> printed_corner_velocity_px_{};
+  int frames_since_found_ = 0;
 };
+
+// How recent the last pose must be (frames) for a lost tag to be called cut
+// by the frame edge: half a second at 30 fps, before the camera can have
+// moved far.
+inline constexpr int kCutByEdgeMemoryFrames = 15;
 
 // BT.601 luma (OpenCV's RGB->GRAY weights), packed: stride = width. For the
 // sim and image sources, which give RGB; the libcamera source has a Y plane.

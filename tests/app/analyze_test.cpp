@@ -280,10 +280,32 @@ TEST_F(Analyze, NoTagIsExit3WithAValidFileSayingWhy) {
   const nlohmann::json analysis = readAnalysis();
   ASSERT_TRUE(analysis.contains("error"));
   EXPECT_NE(analysis["error"].get<std::string>().find("tag"), std::string::npos) << analysis["error"];
-  for (const char* absent : {"tag", "pose", "probe", "irradiance"}) EXPECT_FALSE(analysis.contains(absent)) << absent;
+  ASSERT_TRUE(analysis.contains("tag"));
+  EXPECT_EQ(analysis["tag"]["status"], "no_tag");
+  EXPECT_TRUE(analysis["tag"]["ids_in_view"].empty());
+  EXPECT_NE(analysis["tag"]["message"].get<std::string>().find("partly outside the frame"), std::string::npos);
+  for (const char* absent : {"pose", "probe", "irradiance"}) EXPECT_FALSE(analysis.contains(absent)) << absent;
   EXPECT_TRUE(analysis["timings_ms"].contains("detect_pose"));
   EXPECT_TRUE(fs::exists(dir_ / "out" / "overlay.png")) << "the frame is still shown, with the reason on it";
   EXPECT_FALSE(fs::exists(dir_ / "out" / "reflection_cross.png"));
+}
+
+TEST_F(Analyze, WrongTagIdIsExit3NamingWhatWasSeen) {
+  sim::SceneConfig scene = sim::defaultScene();  // prints tag36h11 id 0
+  const sim::World world(scene);
+  ImageRGB8 rgb;
+  FrameTruth truth;
+  world.render(0, rgb, truth);
+  scene.rig.tag_id = 5;  // the rig file says another tag
+  const CommandResult result = run(writeInputs(scene, rgb));
+  EXPECT_EQ(result.exit_status, kAnalyzeNotFoundExitStatus) << result.stderr_text;
+  expectOneLine(result);
+  const nlohmann::json analysis = readAnalysis();
+  EXPECT_EQ(analysis["tag"]["status"], "wrong_id");
+  EXPECT_EQ(analysis["tag"]["wanted_id"], 5);
+  EXPECT_EQ(analysis["tag"]["ids_in_view"], nlohmann::json::array({0}));
+  EXPECT_NE(analysis["error"].get<std::string>().find("id 0"), std::string::npos) << analysis["error"];
+  EXPECT_FALSE(analysis.contains("pose"));
 }
 
 TEST_F(Analyze, BallCutByTheImageEdgeIsExit3WithTagAndPose) {

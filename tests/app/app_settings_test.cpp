@@ -32,6 +32,13 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.maps.force_8bit, defaults.maps.force_8bit);
   EXPECT_DOUBLE_EQ(from_file.tracking.quad_decimate, defaults.tracking.quad_decimate);
   EXPECT_EQ(from_file.tracking.threads, defaults.tracking.threads);
+  EXPECT_EQ(from_file.tracking.refine_edges, defaults.tracking.refine_edges);
+  EXPECT_EQ(from_file.tracking.refine_corners, defaults.tracking.refine_corners);
+  EXPECT_EQ(from_file.tracking.smoothing.enabled, defaults.tracking.smoothing.enabled);
+  EXPECT_DOUBLE_EQ(from_file.tracking.smoothing.static_cutoff_hz, defaults.tracking.smoothing.static_cutoff_hz);
+  EXPECT_DOUBLE_EQ(from_file.tracking.smoothing.max_lag_px, defaults.tracking.smoothing.max_lag_px);
+  EXPECT_DOUBLE_EQ(from_file.tracking.smoothing.speed_cutoff_hz, defaults.tracking.smoothing.speed_cutoff_hz);
+  EXPECT_DOUBLE_EQ(from_file.tracking.smoothing.reset_jump_px, defaults.tracking.smoothing.reset_jump_px);
   EXPECT_DOUBLE_EQ(from_file.object.radius_m, defaults.object.radius_m);
   EXPECT_EQ(from_file.object.albedo, defaults.object.albedo);
   EXPECT_EQ(from_file.recalibration.good_frames_needed, defaults.recalibration.good_frames_needed);

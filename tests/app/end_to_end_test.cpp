@@ -75,6 +75,10 @@ TEST_F(EndToEnd, SimulatedRunDrawsTheObjectWhereTheTagSays) {
     EXPECT_FALSE(report["accuracy"][measure].is_null()) << measure;
   }
   EXPECT_EQ(report["counters"]["calibrations_completed"], 1);
+  EXPECT_EQ(report["tag_status"]["frames"]["found"], frames);
+  EXPECT_TRUE(report["tag_status"]["last_problem"].is_null());
+  // Smoothing is on by default, and the raw pose's accuracy is reported beside it.
+  EXPECT_TRUE(report["accuracy"].contains("probe_center_error_px_unsmoothed"));
   // Every frame either updated the maps or says why not, and the stage
   // counts agree with the policy's.
   const nlohmann::json& updates = report["map_updates"];
@@ -220,6 +224,9 @@ TEST_F(EndToEnd, FramesWithoutATagStillShowAndSayWhy) {
   EXPECT_EQ(report["frames"], 3) << "the empty file is skipped with a warning, the rest are processed";
   EXPECT_NE(result.stderr_text.find("c_empty.png"), std::string::npos) << result.stderr_text;
   EXPECT_EQ(report["counters"]["frames_without_tag"], 2);
+  EXPECT_EQ(report["tag_status"]["frames"]["no_tag"], 2);
+  EXPECT_FALSE(report["tag_status"]["frames"].contains("found"));
+  EXPECT_EQ(report["tag_status"]["last_problem"]["status"], "no_tag");
   EXPECT_EQ(report["counters"]["frames_wrong_size"], 1);
   EXPECT_NE(result.stderr_text.find("No tag in view"), std::string::npos) << result.stderr_text;
   EXPECT_EQ(report["stages"]["probe_to_cube"]["runs"], 0);

@@ -274,6 +274,8 @@ std::vector<BadField> badFields() {
       {"sim", "sun_azimuth_rate_deg_per_frame"}};
   for (const auto& [section, name] : app_scalars)
     out.push_back({"probelight", section + ":\n  " + name + ": VALUE\n", section + "." + name});
+  for (const std::string name : {"static_cutoff_hz", "max_lag_px", "speed_cutoff_hz", "reset_jump_px"})
+    out.push_back({"probelight", "tracking:\n  smoothing:\n    " + name + ": VALUE\n", "tracking.smoothing." + name});
   for (const std::string vector : {"position", "albedo"})
     for (int i = 0; i < 3; ++i) {
       const std::string ok = vector == "position" ? "0.0" : "0.5";
@@ -311,7 +313,7 @@ std::vector<BadField> badFields() {
 
 TEST_F(Stress, NanOrInfInAnyFloatFieldIsOneLineAndExit2) {
   const std::vector<BadField> fields = badFields();
-  ASSERT_EQ(fields.size(), 15u + 6u + 14u + 6u);
+  ASSERT_EQ(fields.size(), 15u + 4u + 6u + 14u + 6u);
   for (const BadField& bad : fields) {
     for (const char* value : {".nan", ".inf", "-.inf"}) {
       std::string yaml = bad.yaml;

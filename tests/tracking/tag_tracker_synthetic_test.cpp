@@ -411,3 +411,86 @@ TEST(TagTrackerSettings, KioskTagIsFoundAtEverySpeedSetting) {
 
 }  // namespace
 }  // namespace probelight
+
+namespace probelight {
+namespace {
+
+// Two tags side by side: each half of the frame is a render whose camera
+// looks beside the tag, so each half holds one whole tag.
+cv::Mat twoTagFrame(int left_id, int right_id) {
+  TagScene left, right;
+  left.camera = right.camera = boardCamera();
+  left.tag_id = left_id;
+  right.tag_id = right_id;
+  left.pose = orbitPose(0.6, 0.0, 0.0, {0, 1, 0}, {0.12, 0.0, 0.0});   // tag left of centre
+  right.pose = orbitPose(0.6, 0.0, 0.0, {0, 1, 0}, {-0.12, 0.0, 0.0}); // tag right of centre
+  cv::Mat frame = testing::renderTagScene(left);
+  cv::Mat right_frame = testing::renderTagScene(right);
+  right_frame(cv::Rect(320, 0, 320, 480)).copyTo(frame(cv::Rect(320, 0, 320, 480)));
+  return frame;
+}
+
+TEST(TagTrackerStatus, SeveralTagsWithTheRigsIdAreRefusedOtherIdsIgnored) {
+  TagTracker tracker(tracking::TagDetectorSettings{}, RigGeometry{}, boardCamera());
+  cv::Mat twins = twoTagFrame(0, 0);
+  TagTrackResult refused = tracker.track(twins.data, twins.cols, twins.rows, static_cast<int>(twins.step));
+  EXPECT_FALSE(refused.found);
+  EXPECT_EQ(refused.status_code, tracking::TagTrackStatus::kSeveralTags) << refused.status;
+  EXPECT_EQ(refused.ids_in_view, (std::vector<int>{0, 0}));
+  EXPECT_NE(refused.status.find("2 tag36h11 tags with the rig's id 0"), std::string::npos) << refused.status;
+
+  cv::Mat mixed = twoTagFrame(7, 0);
+  TagTrackResult found = tracker.track(mixed.data, mixed.cols, mixed.rows, static_cast<int>(mixed.step));
+  ASSERT_TRUE(found.found) << found.status;
+  EXPECT_EQ(found.id, 0);
+  EXPECT_EQ(found.ids_in_view, (std::vector<int>{0, 7}));
+  EXPECT_NE(found.status.find("ignored: id 7"), std::string::npos) << found.status;
+  EXPECT_GT(found.corners_px[0].x, 320.0) << "the rig's tag is the right-hand one";
+  EXPECT_STREQ(tracking::toString(found.status_code), "found");
+  EXPECT_STREQ(tracking::toString(refused.status_code), "several_tags");
+}
+
+TEST(TagTrackerStatus, ATagLeavingTheFrameIsCutThenGoneAndAnAbsentOneIsJustMissing) {
+  // The camera slides along -x, so the tag moves right in the image ~10 px a
+  // frame until it is cut by the right edge, and later is out of the frame.
+  TagTracker tracker(tracking::TagDetectorSettings{}, RigGeometry{}, boardCamera());
+  TagScene scene;
+  scene.camera = boardCamera();
+  int found = 0, cut = 0, gone = 0, first_cut = -1, last_found = -1;
+  for (int frame = 0; frame < 40; ++frame) {
+    const double x = -0.01 * frame;
+    scene.pose = orbitPose(0.6, 0.0, 0.0, {0, 1, 0}, {x, 0.0, 0.0});
+    cv::Mat image = testing::renderTagScene(scene);
+    TagTrackResult result = tracker.track(image.data, image.cols, image.rows, static_cast<int>(image.step));
+    if (result.found) {
+      ++found;
+      last_found = frame;
+      EXPECT_EQ(cut + gone, 0) << "found again at frame " << frame << " after it was lost";
+    } else if (result.status_code == tracking::TagTrackStatus::kCutByFrameEdge) {
+      if (first_cut < 0) first_cut = frame;
+      ++cut;
+      EXPECT_NE(result.status.find("frame edge"), std::string::npos) << result.status;
+    } else {
+      EXPECT_EQ(result.status_code, tracking::TagTrackStatus::kNoTag) << result.status;
+      ++gone;
+    }
+  }
+  std::printf("[ status   ] leaving the frame: %d found, %d cut by the edge, %d gone\n", found, cut, gone);
+  // The printed tag is ~130 px wide and moves ~10 px a frame: it is cut for
+  // about 13 frames, the first of which straight after the last sighting.
+  EXPECT_GE(found, 5);
+  EXPECT_EQ(first_cut, last_found + 1);
+  EXPECT_GE(cut, 5);
+  EXPECT_GE(gone, 1) << "beyond the half-second memory, or wholly outside, it is simply not in view";
+
+  // A tag that vanishes from the middle of the frame (covered) is not "cut".
+  TagTracker fresh(tracking::TagDetectorSettings{}, RigGeometry{}, boardCamera());
+  scene.pose = orbitPose(0.6, 0.0, 0.0);
+  cv::Mat visible = testing::renderTagScene(scene);
+  ASSERT_TRUE(fresh.track(visible.data, visible.cols, visible.rows, static_cast<int>(visible.step)).found);
+  cv::Mat covered(480, 640, CV_8U, cv::Scalar(110));
+  EXPECT_EQ(fresh.track(covered.data, 640, 480, 640).status_code, tracking::TagTrackStatus::kNoTag);
+}
+
+}  // namespace
+}  // namespace probelight
