@@ -31,6 +31,8 @@ struct TrackingConfig {
   double quad_sigma = 0.0;
   bool refine_edges = true;
   bool refine_corners = true;  // full-resolution linear-light edge fit (tracking/corner_refiner.hpp)
+  bool track_in_window = true;     // search a window around the predicted tag (tracking/tag_detector.hpp)
+  int full_frame_every_frames = 30;
   tracking::PoseSmoothingSettings smoothing;  // tracking/pose_smoother.hpp
 };
 

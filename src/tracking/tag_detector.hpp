@@ -18,9 +18,10 @@ struct apriltag_family;
 namespace probelight::tracking {
 
 // Defaults chosen by measurement at 640x480 on the desktop (x86, 2 shared
-// cores; tests/tracking prints these): median detection + pose time on a
-// kiosk-like frame is 37 ms at quad_decimate 1, 8.5 ms at 2, 3.4 ms at 3 (one
-// thread), 6 ms at 2 with two threads. At 2 with refine_edges, rendered tags
+// cores; build/probelight_bench --benchmark_filter=detect_pose, one thread,
+// docs/benchmarks.md): detection + refined pose on a whole frame takes 23 ms
+// at quad_decimate 1, 6.5 ms at 2, 4.3 ms at 3; following the tag in a
+// window (track_in_window) 4.6, 2.6 and 2.3 ms. At 2 with refine_edges, rendered tags
 // down to 25 px across are found with corners within 0.3 px for >= 32 px;
 // at 3, 25 px tags are lost, and without refine_edges the corners are off by
 // up to 1.8 px. The kiosk's tag is 60-200 px across, so 2 leaves margin for
@@ -43,6 +44,14 @@ struct TagDetectorSettings {
   // Costs ~2 ms a frame on the desktop; tests/tracking/pose_accuracy_test.cpp
   // measures both settings.
   bool refine_corners = true;
+  // While the tag is tracked from frame to frame, look for it only in a
+  // window around where its motion predicts it (the printed tag plus a
+  // margin), which costs in proportion to the window's area; the whole
+  // frame is searched when the window misses, when the tag was lost, and
+  // every full_frame_every_frames frames so that a second copy of the tag
+  // or other tags entering the view are still reported.
+  bool track_in_window = true;
+  int full_frame_every_frames = 30;
 };
 
 // AprilTag reports pixel coordinates with pixel i spanning [i, i+1), so its

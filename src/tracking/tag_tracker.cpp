@@ -297,6 +297,54 @@ TagTracker::TagTracker(TagDetectorSettings settings, RigGeometry rig, CameraIntr
   if (!(settings.pose_ambiguity_margin_px >= 0.0)) throw std::invalid_argument("pose_ambiguity_margin_px must be >= 0");
 }
 
+std::vector<TagDetection> TagTracker::detectAround(const std::uint8_t* luma, int width, int height, int stride_bytes) {
+  searched_window_ = false;
+  const TagDetectorSettings& settings = detector_.settings();
+  ++frames_since_full_search_;
+  // Only straight after a frame that found the tag (track() counts this
+  // frame in frames_since_found_ after the search).
+  if (settings.track_in_window && last_printed_corners_px_ && frames_since_found_ == 0 &&
+      frames_since_full_search_ < settings.full_frame_every_frames) {
+    // The printed tag where its last motion puts it, grown by a quarter of
+    // its size plus that motion again (acceleration: a hand-held camera
+    // changes speed by far less than its speed in one frame).
+    double min_x = 1e300, min_y = 1e300, max_x = -1e300, max_y = -1e300, speed_px = 0.0;
+    for (std::size_t k = 0; k < 4; ++k) {
+      const glm::dvec2 predicted = (*last_printed_corners_px_)[k] + printed_corner_velocity_px_[k];
+      min_x = std::min(min_x, predicted.x), max_x = std::max(max_x, predicted.x);
+      min_y = std::min(min_y, predicted.y), max_y = std::max(max_y, predicted.y);
+      speed_px = std::max(speed_px, glm::length(printed_corner_velocity_px_[k]));
+    }
+    const double margin = 0.25 * std::max(max_x - min_x, max_y - min_y) + speed_px + 8.0;
+    // Origin on the whole-frame search's grid of decimated 4x4 threshold
+    // tiles, so that both searches threshold the tag's pixels alike.
+    const int grid = 4 * std::max(1, static_cast<int>(std::lround(settings.quad_decimate)));
+    const int x0 = std::max(0, static_cast<int>(std::floor(min_x - margin)) / grid * grid);
+    const int y0 = std::max(0, static_cast<int>(std::floor(min_y - margin)) / grid * grid);
+    const int x1 = std::min(width, static_cast<int>(std::ceil(max_x + margin)) + 1);
+    const int y1 = std::min(height, static_cast<int>(std::ceil(max_y + margin)) + 1);
+    const int window_w = x1 - x0, window_h = y1 - y0;
+    // Worth it only when the window is clearly smaller than the frame.
+    if (window_w >= detector_.minimumFrameSizePx() && window_h >= detector_.minimumFrameSizePx() &&
+        static_cast<double>(window_w) * window_h < 0.6 * static_cast<double>(width) * height) {
+      std::vector<TagDetection> detections =
+          detector_.detect(luma + static_cast<std::ptrdiff_t>(y0) * stride_bytes + x0, window_w, window_h, stride_bytes);
+      int with_rig_id = 0;
+      for (TagDetection& detection : detections) {
+        for (glm::dvec2& corner : detection.corners_px) corner += glm::dvec2(x0, y0);
+        detection.center_px += glm::dvec2(x0, y0);
+        if (detection.id == rig_.tag_id) ++with_rig_id;
+      }
+      if (with_rig_id == 1) {
+        searched_window_ = true;
+        return detections;
+      }
+    }
+  }
+  frames_since_full_search_ = 0;
+  return detector_.detect(luma, width, height, stride_bytes);
+}
+
 TagTrackResult TagTracker::track(const std::uint8_t* luma, int width, int height, int stride_bytes) {
   TagTrackResult result;
   result.alternative_reprojection_error_px = std::numeric_limits<double>::infinity();
@@ -308,7 +356,7 @@ TagTrackResult TagTracker::track(const std::uint8_t* luma, int width, int height
     return result;
   }
 
-  std::vector<TagDetection> detections = detector_.detect(luma, width, height, stride_bytes);
+  std::vector<TagDetection> detections = detectAround(luma, width, height, stride_bytes);
   const TagDetection* chosen = nullptr;
   int with_rig_id = 0;
   for (const TagDetection& detection : detections) {

@@ -135,6 +135,17 @@ class TagTracker {
   std::optional<std::array<glm::dvec2, 4>> last_printed_corners_px_;
   std::array<glm::dvec2, 4> printed_corner_velocity_px_{};
   int frames_since_found_ = 0;
+  int frames_since_full_search_ = 0;
+  // Detections in the predicted window, or the whole frame (see
+  // TagDetectorSettings::track_in_window); sets searched_window_.
+  std::vector<TagDetection> detectAround(const std::uint8_t* luma, int width, int height, int stride_bytes);
+
+ public:
+  // Whether the last track() searched only a window of the frame (for tests and the bench).
+  bool lastSearchWasWindowed() const { return searched_window_; }
+
+ private:
+  bool searched_window_ = false;
 };
 
 // How recent the last pose must be (frames) for a lost tag to be called cut

@@ -34,6 +34,8 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.tracking.threads, defaults.tracking.threads);
   EXPECT_EQ(from_file.tracking.refine_edges, defaults.tracking.refine_edges);
   EXPECT_EQ(from_file.tracking.refine_corners, defaults.tracking.refine_corners);
+  EXPECT_EQ(from_file.tracking.track_in_window, defaults.tracking.track_in_window);
+  EXPECT_EQ(from_file.tracking.full_frame_every_frames, defaults.tracking.full_frame_every_frames);
   EXPECT_EQ(from_file.tracking.smoothing.enabled, defaults.tracking.smoothing.enabled);
   EXPECT_DOUBLE_EQ(from_file.tracking.smoothing.static_cutoff_hz, defaults.tracking.smoothing.static_cutoff_hz);
   EXPECT_DOUBLE_EQ(from_file.tracking.smoothing.max_lag_px, defaults.tracking.smoothing.max_lag_px);
