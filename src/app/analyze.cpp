@@ -30,6 +30,7 @@
 #include "ibl/probe_outline.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
+#include "tracking/probe_edge_fit.hpp"
 #include "tracking/tag_tracker.hpp"
 
 namespace probelight {
@@ -282,7 +283,8 @@ class Analyzer {
     }
     result_.json["probe"] = {{"center_px", vec2Json(outline_.center_px)},
                              {"radius_px", outline_.radius_px},
-                             {"bbox_px", Json::array({vec2Json(outline_.min_px), vec2Json(outline_.max_px)})}};
+                             {"bbox_px", Json::array({vec2Json(outline_.min_px), vec2Json(outline_.max_px)})},
+                             {"edge_fit", edgeFitJson()}};
     const double min_radius_px = settings_.map_updates.min_probe_radius_px;
     if (outline_.radius_px < min_radius_px) {
       // The run skips such frames too (map_update_policy.hpp): a map from
@@ -292,6 +294,30 @@ class Analyzer {
       return;
     }
     probe_usable_ = true;
+  }
+
+  // The outline refined against the image (tracking/probe_edge_fit.hpp):
+  // reported, not used, so that a user can see how far the rig's measured
+  // ball is from where the frame shows it (and where in W it would be).
+  Json edgeFitJson() {
+    std::vector<std::uint8_t> luma;
+    tracking::rgbToLuma(frame_rgb_, luma);
+    const tracking::ProbeEdgeFit fit =
+        tracking::fitProbeOutlineToEdges(luma.data(), frame_rgb_.width, frame_rgb_.height, frame_rgb_.width, outline_,
+                                         rig_.probe_reflectance, settings_.maps.stages.camera_transfer);
+    Json json = {{"ok", fit.ok}, {"profiles", fit.profiles}, {"trusted_profiles", fit.trusted_profiles}};
+    if (!fit.ok) {
+      json["reason"] = fit.reason;
+      return json;
+    }
+    json["shift_px"] = vec2Json(fit.shift_px);
+    json["radius_scale"] = fit.radius_scale;
+    json["center_px"] = vec2Json(fit.center_px);
+    json["radius_px"] = fit.radius_px;
+    json["rms_px"] = fit.rms_px;
+    json["implied_probe_center_w"] =
+        vec3Json(tracking::probeCenterForImageShift(track_.pose, camera_, rig_.probe_center_w, fit.shift_px));
+    return json;
   }
 
   void makeMaps() {

@@ -137,6 +137,9 @@ TEST_P(AnalyzeSim, SeesWhatTheSimulatorRendered) {
   ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
   const nlohmann::json analysis = readAnalysis();
   EXPECT_FALSE(analysis.contains("error"));
+  // The simulator's ball is a perfect mirror: no rim step, so no edge fit, and a reason.
+  EXPECT_FALSE(analysis["probe"]["edge_fit"]["ok"].get<bool>());
+  EXPECT_TRUE(analysis["probe"]["edge_fit"].contains("reason"));
 
   EXPECT_EQ(analysis["tag"]["family"], "tag36h11");
   EXPECT_EQ(analysis["tag"]["id"], 0);
@@ -288,6 +291,35 @@ TEST_F(Analyze, NoTagIsExit3WithAValidFileSayingWhy) {
   EXPECT_TRUE(analysis["timings_ms"].contains("detect_pose"));
   EXPECT_TRUE(fs::exists(dir_ / "out" / "overlay.png")) << "the frame is still shown, with the reason on it";
   EXPECT_FALSE(fs::exists(dir_ / "out" / "reflection_cross.png"));
+}
+
+// A rig.yaml whose ball is 3 mm off: the pipeline still uses the rig (a
+// fit is a few tenths of a pixel good, a correct rig is exact), but
+// analysis.json says where the frame shows the ball, and where in W that is.
+TEST_F(Analyze, ReportsWhereTheImageShowsTheBallWhenTheRigIsOff) {
+  sim::SceneConfig scene = sim::defaultScene();
+  scene.rig.probe_reflectance = 0.7;  // chrome: a perfect mirror has no visible rim
+  const sim::World world(scene);
+  ImageRGB8 rgb;
+  FrameTruth truth;
+  world.render(0, rgb, truth);
+  const glm::dvec3 true_center = scene.rig.probe_center_w;
+  scene.rig.probe_center_w.x += 0.003;
+  const CommandResult result = run(writeInputs(scene, rgb));
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json probe = readAnalysis()["probe"];
+  const nlohmann::json& fit = probe["edge_fit"];
+  ASSERT_TRUE(fit["ok"].get<bool>()) << fit.dump();
+  const glm::dvec2 predicted(probe["center_px"][0].get<double>(), probe["center_px"][1].get<double>());
+  const glm::dvec2 fitted(fit["center_px"][0].get<double>(), fit["center_px"][1].get<double>());
+  EXPECT_GT(glm::length(predicted - truth.probe_center_px), 2.0) << "the rig error must show in the prediction";
+  // tests/tracking/probe_edge_fit_test.cpp: fits land within 0.35 px.
+  EXPECT_LT(glm::length(fitted - truth.probe_center_px), 0.35);
+  // 0.35 px at the ball's ~0.5 m is ~0.3 mm across the line of sight; the
+  // 3 mm error here is mostly across it from this view (x, camera on -y).
+  const glm::dvec3 implied(fit["implied_probe_center_w"][0].get<double>(), fit["implied_probe_center_w"][1].get<double>(),
+                           fit["implied_probe_center_w"][2].get<double>());
+  EXPECT_LT(std::abs(implied.x - true_center.x), 0.001);
 }
 
 TEST_F(Analyze, WrongTagIdIsExit3NamingWhatWasSeen) {
