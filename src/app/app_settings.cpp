@@ -106,6 +106,12 @@ AppSettings loadAppSettings(const std::string& path) {
       updates.readDouble("smoothing_new_weight", policy.smoothing_new_weight, Range::openClosed(0.0, 1.0));
   updates.rejectUnknownFields();
 
+  ConfigReader refinement = file.section("probe_refinement");
+  settings.probe_refinement.enabled = refinement.readBool("enabled", settings.probe_refinement.enabled);
+  settings.probe_refinement.weight =
+      refinement.readDouble("weight", settings.probe_refinement.weight, Range::openClosed(0.0, 1.0));
+  refinement.rejectUnknownFields();
+
   ConfigReader sim = file.section("sim");
   settings.sim.env = sim.readString("env", settings.sim.env);
   settings.sim.camera_path = sim.readString("camera_path", settings.sim.camera_path);
@@ -115,6 +121,7 @@ AppSettings loadAppSettings(const std::string& path) {
       "sun_azimuth_rate_deg_per_frame", settings.sim.sun_azimuth_rate_deg_per_frame, Range::closed(-90.0, 90.0));
   settings.sim.lamp_on_frame = sim.readInt("lamp_on_frame", settings.sim.lamp_on_frame, Range::atLeast(-1));
   settings.sim.lamp_off_frame = sim.readInt("lamp_off_frame", settings.sim.lamp_off_frame, Range::atLeast(-1));
+  settings.sim.ball_offset_m = sim.readVec3("ball_offset", settings.sim.ball_offset_m, Range::closed(-0.1, 0.1));
   sim.rejectUnknownFields();
 
   ConfigReader output = file.section("output");

@@ -36,6 +36,15 @@ struct TrackingConfig {
   tracking::PoseSmoothingSettings smoothing;  // tracking/pose_smoother.hpp
 };
 
+// Refining the rig's ball position and radius from the image, over frames
+// (tracking/probe_edge_fit.hpp). Off by default: a fit is good to a few
+// tenths of a pixel per view, so it helps a rig measured millimetres wrong and
+// costs a correct one a little.
+struct ProbeRefinementConfig {
+  bool enabled = false;
+  double weight = 0.1;  // each frame's fit moves the correction this far toward it (30 frames: 96% of the way)
+};
+
 struct ObjectConfig {
   double radius_m = 0.035;             // a sphere resting on the ground
   glm::dvec2 position_w{0.0, 0.0};     // where it rests, in W (metres)
@@ -58,6 +67,9 @@ struct SimConfig {
   double sun_azimuth_rate_deg_per_frame = 0.0;
   int lamp_on_frame = -1;   // -1: never
   int lamp_off_frame = -1;  // -1: stays on
+  // Where the simulated ball really sits relative to rig.yaml's probe_center
+  // (metres, W): a rig measured wrong, for testing probe_refinement.
+  glm::dvec3 ball_offset_m{0.0};
 };
 
 struct AppSettings {
@@ -66,6 +78,7 @@ struct AppSettings {
   ObjectConfig object;
   RecalibrationPolicy recalibration;
   MapUpdateSettings map_updates;  // when the maps are rebuilt (map_update_policy.hpp)
+  ProbeRefinementConfig probe_refinement;
   SimConfig sim;
   int save_every = 1;     // write every K-th composited frame; 0 = none
   bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)

@@ -36,6 +36,7 @@
 #include "pipeline/object_compositor.hpp"
 #include "sim/world.hpp"
 #include "tracking/pose_smoother.hpp"
+#include "tracking/probe_edge_fit.hpp"
 #include "tracking/tag_tracker.hpp"
 
 namespace probelight {
@@ -273,15 +274,17 @@ class Kiosk {
     scene.lighting.lamp_off_frame = settings.sim.lamp_off_frame;
     if (inputs_.camera_from_file) scene.camera = inputs_.camera;
     if (inputs_.rig_from_file) scene.rig = inputs_.rig;
+    // The simulated camera and rig are what the pipeline is told: a perfect
+    // calibration, so that the errors measured are the pipeline's own...
+    inputs_.camera = scene.camera;
+    inputs_.rig = scene.rig;
+    // ...unless sim.ball_offset says the real ball is elsewhere.
+    scene.rig.probe_center_w += settings.sim.ball_offset_m;
     try {
       world_ = std::make_shared<const sim::World>(scene);
     } catch (const sim::SceneError& error) {
       return fail(2, error.what());
     }
-    // The simulated camera and rig are what the pipeline is told: a perfect
-    // calibration, so that the errors measured are the pipeline's own.
-    inputs_.camera = scene.camera;
-    inputs_.rig = scene.rig;
     source_ = std::make_unique<SimFrameSource>(world_, frameLimit());
     return 0;
   }
@@ -374,14 +377,18 @@ class Kiosk {
     // Everything downstream (ball crop, maps, object) uses the smoothed pose.
     std::optional<ibl::MirrorBallView> unsmoothed_view;
     if (track.found && inputs_.settings.tracking.smoothing.enabled) {
-      unsmoothed_view = ibl::MirrorBallView{camera, track.pose, rig.probe_center_w, rig.probe_radius_m};
+      unsmoothed_view = ibl::MirrorBallView{camera, track.pose, rig.probe_center_w + probe_center_offset_w_,
+                                            rig.probe_radius_m * probe_radius_scale_};
       track.pose = smoother_->update(track.pose, static_cast<double>(frame.metadata.timestamp_ns) * 1e-9);
     }
 
     // Stages 2-3: the maps, rebuilt only from a frame that shows the whole
     // ball, with a steady camera, and an image that says something new
     // (map_update_policy.hpp); otherwise the last good maps stay.
-    const ibl::MirrorBallView view{camera, track.pose, rig.probe_center_w, rig.probe_radius_m};
+    // The rig's ball, as corrected by probe_refinement (nothing when it is off).
+    const glm::dvec3 probe_center_w = rig.probe_center_w + probe_center_offset_w_;
+    const double probe_radius_m = rig.probe_radius_m * probe_radius_scale_;
+    const ibl::MirrorBallView view{camera, track.pose, probe_center_w, probe_radius_m};
     ibl::ProbeOutline outline;
     std::string status;
     tag_status_frames_[tracking::toString(track.status_code)] += 1;
@@ -394,6 +401,7 @@ class Kiosk {
                            {"message", track.status}};
     } else {
       outline = ibl::computeProbeOutline(view);
+      refineProbe(view, outline);
     }
     MapFrameInput policy_input;
     policy_input.tag_found = track.found;
@@ -594,6 +602,7 @@ class Kiosk {
     report_.extra["map_updates"] = mapUpdatesJson();
     // Frames per tracking status, and the last frame the tag was not usable.
     report_.extra["tag_status"] = {{"frames", tag_status_frames_}, {"last_problem", last_tag_problem_}};
+    report_.extra["probe_refinement"] = probeRefinementJson();
     const nlohmann::json json = report_.toJson(static_cast<long long>(frames_done_), elapsed_s);
     const std::filesystem::path report_path = std::filesystem::path(options_.out_dir) / "report.json";
     std::ofstream out(report_path);
@@ -603,6 +612,42 @@ class Kiosk {
       log_ << "probelight: " << frames_done_ << " frames in " << std::fixed << std::setprecision(1) << elapsed_s
            << " s; report: " << report_path.string() << "\n";
     return 0;
+  }
+
+  // probe_refinement: fits this frame's ball outline to the image and moves
+  // the rig correction toward what the fit implies (tracking/probe_edge_fit.hpp).
+  // Only on a ball fully in view and big enough to be worth a map.
+  void refineProbe(const ibl::MirrorBallView& view, const ibl::ProbeOutline& outline) {
+    const ProbeRefinementConfig& config = inputs_.settings.probe_refinement;
+    if (!config.enabled || !outline.valid || !outline.fully_in_image ||
+        outline.radius_px < inputs_.settings.map_updates.min_probe_radius_px)
+      return;
+    StageTimer timer(report_, "probe_refine");
+    const tracking::ProbeEdgeFit fit = tracking::fitProbeOutlineToEdges(
+        luma_.data(), view.camera.width_px, view.camera.height_px, view.camera.width_px, outline,
+        inputs_.rig.probe_reflectance, inputs_.settings.maps.stages.camera_transfer);
+    if (!fit.ok) {
+      ++probe_fits_refused_;
+      probe_fit_last_refusal_ = fit.reason;
+      return;
+    }
+    ++probe_fits_;
+    probe_fit_shift_px_.add(glm::length(fit.shift_px));
+    const glm::dvec3 implied = tracking::probeCenterForImageShift(view.pose, view.camera, view.center_w, fit.shift_px);
+    probe_center_offset_w_ += config.weight * (implied - view.center_w);
+    probe_radius_scale_ *= 1.0 + config.weight * (fit.radius_scale - 1.0);
+  }
+
+  nlohmann::json probeRefinementJson() const {
+    nlohmann::json json = {{"enabled", inputs_.settings.probe_refinement.enabled},
+                           {"fits", probe_fits_},
+                           {"refused", probe_fits_refused_},
+                           {"center_offset_mm", {1000.0 * probe_center_offset_w_.x, 1000.0 * probe_center_offset_w_.y,
+                                                 1000.0 * probe_center_offset_w_.z}},
+                           {"radius_scale", probe_radius_scale_}};
+    if (!probe_fit_shift_px_.empty()) json["fit_shift_px_median"] = probe_fit_shift_px_.median();
+    if (!probe_fit_last_refusal_.empty()) json["last_refusal"] = probe_fit_last_refusal_;
+    return json;
   }
 
   // The report names the diffuse stage after the method that ran.
@@ -635,6 +680,12 @@ class Kiosk {
   std::unique_ptr<tracking::PoseSmoother> smoother_;
   std::map<std::string, long long> tag_status_frames_;
   nlohmann::json last_tag_problem_;  // null until a frame's tag is not usable
+  // probe_refinement's correction of rig.yaml's ball, and its record.
+  glm::dvec3 probe_center_offset_w_{0.0};
+  double probe_radius_scale_ = 1.0;
+  long long probe_fits_ = 0, probe_fits_refused_ = 0;
+  SampleSeries probe_fit_shift_px_;
+  std::string probe_fit_last_refusal_;
   std::unique_ptr<ButtonSource> button_;
 
   ibl::SurfaceMaterial material_;

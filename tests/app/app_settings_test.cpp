@@ -55,6 +55,9 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_DOUBLE_EQ(from_file.map_updates.change_threshold_code, defaults.map_updates.change_threshold_code);
   EXPECT_EQ(from_file.map_updates.max_age_frames, defaults.map_updates.max_age_frames);
   EXPECT_DOUBLE_EQ(from_file.map_updates.smoothing_new_weight, defaults.map_updates.smoothing_new_weight);
+  EXPECT_EQ(from_file.probe_refinement.enabled, defaults.probe_refinement.enabled);
+  EXPECT_DOUBLE_EQ(from_file.probe_refinement.weight, defaults.probe_refinement.weight);
+  EXPECT_EQ(from_file.sim.ball_offset_m, defaults.sim.ball_offset_m);
   EXPECT_EQ(from_file.save_every, defaults.save_every);
   EXPECT_EQ(from_file.gpu_finish, defaults.gpu_finish);
 }

@@ -271,11 +271,16 @@ std::vector<BadField> badFields() {
       {"map_updates", "max_center_shift_px"},    {"map_updates", "max_radius_change_px"},
       {"map_updates", "max_rotation_change_deg"}, {"map_updates", "change_threshold_code"},
       {"map_updates", "smoothing_new_weight"},   {"sim", "noise_sigma"},
-      {"sim", "sun_azimuth_rate_deg_per_frame"}};
+      {"sim", "sun_azimuth_rate_deg_per_frame"}, {"probe_refinement", "weight"}};
   for (const auto& [section, name] : app_scalars)
     out.push_back({"probelight", section + ":\n  " + name + ": VALUE\n", section + "." + name});
   for (const std::string name : {"static_cutoff_hz", "max_lag_px", "speed_cutoff_hz", "reset_jump_px"})
     out.push_back({"probelight", "tracking:\n  smoothing:\n    " + name + ": VALUE\n", "tracking.smoothing." + name});
+  for (int i = 0; i < 3; ++i) {
+    std::string items = "[";
+    for (int k = 0; k < 3; ++k) items += (k ? ", " : "") + (k == i ? std::string("VALUE") : std::string("0.0"));
+    out.push_back({"probelight", "sim:\n  ball_offset: " + items + "]\n", "sim.ball_offset"});
+  }
   for (const std::string vector : {"position", "albedo"})
     for (int i = 0; i < 3; ++i) {
       const std::string ok = vector == "position" ? "0.0" : "0.5";
@@ -313,7 +318,7 @@ std::vector<BadField> badFields() {
 
 TEST_F(Stress, NanOrInfInAnyFloatFieldIsOneLineAndExit2) {
   const std::vector<BadField> fields = badFields();
-  ASSERT_EQ(fields.size(), 15u + 4u + 6u + 14u + 6u);
+  ASSERT_EQ(fields.size(), 16u + 4u + 3u + 6u + 14u + 6u);
   for (const BadField& bad : fields) {
     for (const char* value : {".nan", ".inf", "-.inf"}) {
       std::string yaml = bad.yaml;
