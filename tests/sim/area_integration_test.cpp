@@ -9,25 +9,13 @@
 #include "sim/scene_geometry.hpp"
 #include "sim/tag_pattern.hpp"
 #include "sim/world.hpp"
+#include "sim_test_helpers.hpp"
 
 namespace probelight::sim {
 namespace {
 
-struct Moments {
-  double area_px = 0.0;
-  glm::dvec2 centroid_px{0.0};
-};
-
-Moments coverageMoments(const std::vector<float>& coverage, int width) {
-  Moments m;
-  glm::dvec2 sum(0.0);
-  for (size_t i = 0; i < coverage.size(); ++i) {
-    m.area_px += coverage[i];
-    sum += static_cast<double>(coverage[i]) * glm::dvec2(static_cast<double>(i % width), static_cast<double>(i / width));
-  }
-  m.centroid_px = sum / m.area_px;
-  return m;
-}
+using testing::coverageMoments;
+using Moments = testing::MaskMoments;
 
 // Shoelace area and centroid of a simple polygon.
 Moments polygonMoments(const std::vector<glm::dvec2>& p) {

@@ -7,27 +7,14 @@
 #include <numbers>
 
 #include "sim/scene_geometry.hpp"
+#include "sim_test_helpers.hpp"
 #include "sim/world.hpp"
 
 namespace probelight::sim {
 namespace {
 
-struct MaskMoments {
-  double area_px = 0.0;
-  glm::dvec2 centroid_px{0.0};
-};
-
-MaskMoments momentsOf(const std::vector<float>& coverage, int width) {
-  MaskMoments m;
-  glm::dvec2 sum{0.0};
-  for (size_t i = 0; i < coverage.size(); ++i) {
-    double f = coverage[i];
-    m.area_px += f;
-    sum += f * glm::dvec2(static_cast<double>(i % width), static_cast<double>(i / width));
-  }
-  m.centroid_px = sum / m.area_px;
-  return m;
-}
+using testing::coverageMoments;
+using testing::MaskMoments;
 
 TEST(ProbeOutline, RenderedBallPixelsMatchOutlineAreaAndCentroid) {
   SceneConfig scene = defaultScene();
@@ -39,7 +26,7 @@ TEST(ProbeOutline, RenderedBallPixelsMatchOutlineAreaAndCentroid) {
   for (std::uint64_t frame : {0u, 1u, 2u}) {
     FrameTruth truth = world.truth(frame);
     ASSERT_TRUE(truth.probe_fully_visible);
-    MaskMoments mask = momentsOf(world.coverage(frame, SceneObject::kProbe), scene.camera.width_px);
+    MaskMoments mask = coverageMoments(world.coverage(frame, SceneObject::kProbe), scene.camera.width_px);
     double mask_radius_px = std::sqrt(mask.area_px / std::numbers::pi);
     // 16 samples a pixel measure each boundary pixel's coverage to about
     // +-1/32 px^2; over the ~200 boundary pixels of a 30 px ball that is

@@ -3,6 +3,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
 
 #include "core/types.hpp"
 #include "sim/scene_config.hpp"
@@ -16,6 +19,25 @@ inline double srgbDecode(double code) {
 
 inline double pixelLinear(const ImageRGB8& image, int x, int y, int channel) {
   return srgbDecode(image.row(y)[x * 3 + channel]);
+}
+
+// Area (px^2) and centroid (OpenCV pixel centres) of a coverage mask, as
+// World::coverage returns it (row-major, `width` wide).
+struct MaskMoments {
+  double area_px = 0.0;
+  glm::dvec2 centroid_px{0.0};
+};
+
+inline MaskMoments coverageMoments(const std::vector<float>& coverage, int width) {
+  MaskMoments m;
+  glm::dvec2 sum(0.0);
+  for (size_t i = 0; i < coverage.size(); ++i) {
+    const double f = coverage[i];
+    m.area_px += f;
+    sum += f * glm::dvec2(static_cast<double>(i % static_cast<size_t>(width)), static_cast<double>(i / static_cast<size_t>(width)));
+  }
+  m.centroid_px = sum / m.area_px;
+  return m;
 }
 
 // Small and fast: for tests that do not need the full 640x480 frame.

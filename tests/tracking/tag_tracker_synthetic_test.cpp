@@ -505,6 +505,25 @@ namespace {
 // image extent). The refiner starts from those and re-fits every edge at
 // full resolution, which leaves a difference of the order of the corners'
 // noise (0.015 px median, pose_accuracy_test): 0.05 px is three times that.
+// One simulated frame's luma plane and truth.
+struct SimFrame {
+  std::vector<std::uint8_t> luma;
+  int width = 0, height = 0;
+  FrameTruth truth;
+};
+SimFrame renderSimFrame(const sim::World& world, std::uint64_t index) {
+  SimFrame frame;
+  ImageRGB8 image;
+  world.render(index, image, frame.truth);
+  tracking::rgbToLuma(image, frame.luma);
+  frame.width = image.width;
+  frame.height = image.height;
+  return frame;
+}
+TagTrackResult trackSimFrame(TagTracker& tracker, const SimFrame& frame) {
+  return tracker.track(frame.luma.data(), frame.width, frame.height, frame.width);
+}
+
 TEST(TagTrackerWindow, FollowsTheTagInAWindowWithTheSameResultAndFallsBackWhenItJumps) {
   sim::SceneConfig scene = sim::defaultScene();
   sim::World world(scene);
@@ -512,18 +531,14 @@ TEST(TagTrackerWindow, FollowsTheTagInAWindowWithTheSameResultAndFallsBackWhenIt
   windowed_settings.family = full_settings.family = scene.rig.tag_family;
   full_settings.track_in_window = false;
   TagTracker windowed(windowed_settings, scene.rig, scene.camera), full(full_settings, scene.rig, scene.camera);
-  std::vector<std::uint8_t> luma;
   int windowed_frames = 0;
   double largest_difference_px = 0.0;
-  for (std::uint64_t frame = 0; frame < 35; ++frame) {
-    ImageRGB8 image;
-    FrameTruth truth;
-    world.render(frame, image, truth);
-    tracking::rgbToLuma(image, luma);
-    TagTrackResult a = windowed.track(luma.data(), image.width, image.height, image.width);
+  for (std::uint64_t index = 0; index < 35; ++index) {
+    const SimFrame frame = renderSimFrame(world, index);
+    TagTrackResult a = trackSimFrame(windowed, frame);
     const bool was_windowed = windowed.lastSearchWasWindowed();
-    TagTrackResult b = full.track(luma.data(), image.width, image.height, image.width);
-    ASSERT_TRUE(a.found && b.found) << "frame " << frame << ": " << a.status << " / " << b.status;
+    TagTrackResult b = trackSimFrame(full, frame);
+    ASSERT_TRUE(a.found && b.found) << "frame " << index << ": " << a.status << " / " << b.status;
     EXPECT_FALSE(full.lastSearchWasWindowed());
     if (was_windowed) ++windowed_frames;
     for (int k = 0; k < 4; ++k) largest_difference_px = std::max(largest_difference_px, glm::length(a.corners_px[k] - b.corners_px[k]));
@@ -538,14 +553,11 @@ TEST(TagTrackerWindow, FollowsTheTagInAWindowWithTheSameResultAndFallsBackWhenIt
   scene.camera_path.name = "random";
   sim::World jumping(scene);
   TagTracker tracker(windowed_settings, scene.rig, scene.camera);
-  for (std::uint64_t frame = 0; frame < 6; ++frame) {
-    ImageRGB8 image;
-    FrameTruth truth;
-    jumping.render(frame, image, truth);
-    tracking::rgbToLuma(image, luma);
-    TagTrackResult result = tracker.track(luma.data(), image.width, image.height, image.width);
-    EXPECT_TRUE(result.found) << "random view " << frame << ": " << result.status;
-    EXPECT_LT(tracking::rotationDifferenceDeg(result.pose.R_cam_from_world, truth.pose.R_cam_from_world), 0.3);
+  for (std::uint64_t index = 0; index < 6; ++index) {
+    const SimFrame frame = renderSimFrame(jumping, index);
+    TagTrackResult result = trackSimFrame(tracker, frame);
+    EXPECT_TRUE(result.found) << "random view " << index << ": " << result.status;
+    EXPECT_LT(tracking::rotationDifferenceDeg(result.pose.R_cam_from_world, frame.truth.pose.R_cam_from_world), 0.3);
   }
 }
 
