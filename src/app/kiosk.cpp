@@ -26,7 +26,7 @@
 #include "display/display.hpp"
 #include "gles/capabilities.hpp"
 #include "ibl/cube_map.hpp"
-#include "ibl/dominant_light.hpp"
+#include "ibl/light_dome.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
 #include "ibl/spherical_harmonics.hpp"
@@ -545,9 +545,12 @@ class Kiosk {
   // current diffuse map.
   int fitLights(std::uint64_t frame_number) {
     std::string error;
-    const std::optional<ibl::CubeMapRGB> diffuse = maps_.readDiffuse(error);
-    if (!diffuse) return fail(1, error);
-    const ibl::DominantLight light = ibl::findDominantLight(*diffuse);
+    std::vector<float> validity;
+    const std::optional<ibl::CubeMapRGB> reflection = maps_.readReflection(error, &validity);
+    if (!reflection) return fail(1, error);
+    const std::vector<ibl::DomeLight> dome = ibl::fitLightDome(*reflection, &validity);
+    const ibl::DominantLight light =
+        ibl::findDominantLight(*reflection, &validity, dome, 1.0 / inputs_.rig.probe_reflectance);
     lighting_.highlight_direction_w = glm::vec3(light.direction_w);
     lighting_.highlight_rgb = glm::vec3(light.rgb);
     report_.count("calibrations_completed");
