@@ -8,6 +8,7 @@
 // quantity is O(1) or a small offset; no metre-scale positions are added to
 // centimetre-scale ones here.
 #include "color_transfer.glsl"
+#include "camera_transfer.glsl"
 #include "camera_projection.glsl"
 #include "cube_storage.glsl"
 
@@ -21,17 +22,6 @@
 // 1e-6 is below mediump's resolution next to 1; this only widens the blind
 // spot (already 0) by a few milliradians.
 #define BLIND_SPOT_LENGTH 1e-3
-#endif
-
-// The camera's transfer (ibl::CameraTransfer), chosen when the program is
-// built: sRGB unless CAMERA_TRANSFER_GAMMA or CAMERA_TRANSFER_LINEAR.
-#if defined(CAMERA_TRANSFER_LINEAR)
-vec3 decodeCamera(vec3 encoded) { return clamp(encoded, 0.0, 1.0); }
-#elif defined(CAMERA_TRANSFER_GAMMA)
-uniform float u_camera_gamma;
-vec3 decodeCamera(vec3 encoded) { return pow(clamp(encoded, 0.0, 1.0), vec3(u_camera_gamma)); }
-#else
-vec3 decodeCamera(vec3 encoded) { return srgbToLinear(encoded); }
 #endif
 
 varying vec2 v_face_st;

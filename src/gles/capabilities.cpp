@@ -1,6 +1,7 @@
 #include "gles/capabilities.hpp"
 #include "gles/extension_list.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 #include <GLES2/gl2.h>
@@ -39,6 +40,7 @@ Capabilities probeCapabilities() {
 
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &caps.max_texture_size_px);
   glGetIntegerv(GL_MAX_CUBE_MAP_TEXTURE_SIZE, &caps.max_cube_map_size_px);
+  glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &caps.max_fragment_texture_units);
   caps.renderer = glString(GL_RENDERER);
   caps.version = glString(GL_VERSION);
   return caps;
@@ -49,6 +51,7 @@ Capabilities Capabilities::withoutExtensions() const {
   plain.fragment_mediump_mantissa_bits = fragment_mediump_mantissa_bits;
   plain.max_texture_size_px = max_texture_size_px;
   plain.max_cube_map_size_px = max_cube_map_size_px;
+  plain.max_fragment_texture_units = std::min(8, max_fragment_texture_units);
   plain.renderer = renderer + " [extensions masked]";
   plain.version = version;
   return plain;
@@ -58,7 +61,8 @@ std::string Capabilities::summary() const {
   std::string text = renderer + " | " + version + " | fragment highp " +
                      (fragment_highp ? std::to_string(fragment_highp_mantissa_bits) + " bits" : std::string("no")) +
                      ", mediump " + std::to_string(fragment_mediump_mantissa_bits) + " bits | max tex " +
-                     std::to_string(max_texture_size_px) + ", cube " + std::to_string(max_cube_map_size_px) + " |";
+                     std::to_string(max_texture_size_px) + ", cube " + std::to_string(max_cube_map_size_px) + ", units " +
+                     std::to_string(max_fragment_texture_units) + " |";
   auto flag = [&text](bool on, const char* name) {
     text += on ? " +" : " -";
     text += name;

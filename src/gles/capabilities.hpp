@@ -21,14 +21,16 @@ struct Capabilities {
   int fragment_mediump_mantissa_bits = 0;  // 10 for IEEE half
   int max_texture_size_px = 0;
   int max_cube_map_size_px = 0;
+  int max_fragment_texture_units = 8;      // GL_MAX_TEXTURE_IMAGE_UNITS; GLES2 guarantees 8
   std::string renderer;  // GL_RENDERER
   std::string version;   // GL_VERSION
 
   // Stages may store linear half floats only when they can both sample and
   // render them; otherwise they use the 8-bit path.
   bool canRenderHalfFloat() const { return texture_half_float && color_buffer_half_float; }
-  // A copy with every optional extension and fragment highp cleared, to run
-  // (and test) the plain 8-bit, mediump-declared path on any GPU.
+  // A copy with every optional extension and fragment highp cleared, and
+  // the texture units cut to GLES2's minimum of 8, to run (and test) the
+  // plain 8-bit, mediump-declared path on any GPU.
   Capabilities withoutExtensions() const;
   // One line for logs: renderer, version, precision and extension flags.
   std::string summary() const;

@@ -1,0 +1,401 @@
+#include "pipeline/ground_shadow.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <glm/gtc/type_ptr.hpp>
+
+namespace probelight::pipeline {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+// How much bigger than the object's bounding sphere the light's frustum is:
+// PCF taps near the silhouette stay inside the map.
+constexpr double kFrustumMargin = 1.04;
+// Depth comparison bias, in [0, 1] units of the frustum's depth (twice the
+// bounding radius): two 10-bit mediump steps. Ground points that close to
+// the object's far side (where it stands on the ground) count as hidden;
+// the ground never shadows itself, so there is no acne to fight.
+constexpr float kBias01 = 2.0f / 1024.0f;
+constexpr int kTaps = 16;
+
+}  // namespace
+
+LightView lightViewFor(const glm::dvec3& direction_w, const glm::dvec3& centre_w, double radius_m) {
+  const glm::dvec3 d = glm::normalize(direction_w);
+  const glm::dvec3 helper = std::abs(d.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0);
+  const glm::dvec3 right = glm::normalize(glm::cross(helper, d));
+  const glm::dvec3 up = glm::cross(d, right);
+  const double half = kFrustumMargin * std::max(radius_m, 1e-6);
+  LightView view;
+  view.width_m = 2.0 * half;
+  view.depth_m = 2.0 * half;
+  // clip.x = right . (p - c) / half; clip.y = up . (p - c) / half;
+  // depth01 = (half - d . (p - c)) / (2 half), clip.z = 2 depth01 - 1 = -d . (p - c) / half.
+  glm::dmat4 m(0.0);
+  for (int k = 0; k < 3; ++k) {
+    m[k][0] = right[k] / half;
+    m[k][1] = up[k] / half;
+    m[k][2] = -d[k] / half;
+  }
+  m[3][0] = -glm::dot(right, centre_w) / half;
+  m[3][1] = -glm::dot(up, centre_w) / half;
+  m[3][2] = glm::dot(d, centre_w) / half;
+  m[3][3] = 1.0;
+  view.clip_from_world = m;
+  // Ground points p(x, y) = c + x right + y up - t d with p.z = 0:
+  // t = (c.z + x right.z + y up.z) / d.z; depth01 = (half + t') / (2 half)
+  // grows with t, and uv with x / (2 half), so per uv the depth01 moves by
+  // (right.z, up.z) / d.z. Lights at the horizon (d.z -> 0) are never
+  // drawn (groundShadowLights keeps d.z > 0); the clamp keeps it finite.
+  view.ground_depth_gradient_per_uv = glm::dvec2(right.z, up.z) / std::max(d.z, 1e-3);
+  return view;
+}
+
+std::vector<glm::vec3> casterTriangles(const ibl::ShadowCaster& caster, int segments) {
+  std::vector<glm::vec3> triangles;
+  const glm::dvec3 centre = caster.boundingCentre();
+  if (caster.shape == ibl::ShadowCaster::Shape::kSphere) {
+    const int around = std::max(8, segments), rings = std::max(4, segments / 2);
+    auto point = [&](int ring, int step) {
+      const double theta = kPi * ring / rings, phi = 2.0 * kPi * step / around;
+      return glm::vec3(centre + caster.radius_m * glm::dvec3(std::sin(theta) * std::cos(phi),
+                                                             std::sin(theta) * std::sin(phi), std::cos(theta)));
+    };
+    for (int ring = 0; ring < rings; ++ring)
+      for (int step = 0; step < around; ++step) {
+        const glm::vec3 a = point(ring, step), b = point(ring + 1, step), c = point(ring + 1, step + 1),
+                        d = point(ring, step + 1);
+        triangles.insert(triangles.end(), {a, b, c, a, c, d});
+      }
+    return triangles;
+  }
+  const double c = std::cos(caster.box_yaw_rad), s = std::sin(caster.box_yaw_rad);
+  auto corner = [&](int k) {
+    const glm::dvec3 local(((k & 1) ? 0.5 : -0.5) * caster.box_size_m.x, ((k & 2) ? 0.5 : -0.5) * caster.box_size_m.y,
+                           ((k & 4) ? 0.5 : -0.5) * caster.box_size_m.z);
+    return glm::vec3(centre + glm::dvec3(c * local.x - s * local.y, s * local.x + c * local.y, local.z));
+  };
+  const int faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+  for (const auto& f : faces)
+    triangles.insert(triangles.end(), {corner(f[0]), corner(f[1]), corner(f[2]), corner(f[0]), corner(f[2]), corner(f[3])});
+  return triangles;
+}
+
+bool GroundShadow::init(const gles::Capabilities& capabilities, const GroundShadowSettings& settings,
+                        std::string& error) {
+  settings_ = settings;
+  if (settings.shadow_map_size_px < 16 || settings.shadow_map_size_px > capabilities.max_texture_size_px ||
+      settings.ground_texture_size_px < 16 || settings.ground_texture_size_px > capabilities.max_texture_size_px) {
+    error = "ground shadow: map sizes must be 16.." + std::to_string(capabilities.max_texture_size_px) + " px";
+    return false;
+  }
+  if (!(settings.max_region_half_size_m > 0.0) || settings.region_mesh_segments < 1) {
+    error = "ground shadow: max_region_half_size_m must be > 0 and region_mesh_segments >= 1";
+    return false;
+  }
+  packed_depth_ = settings.force_packed_depth || !capabilities.depth_texture;
+  lights_per_batch_ = std::clamp(capabilities.max_fragment_texture_units, 1, 8);
+  const std::string packed_define = packed_depth_ ? "#define SHADOW_DEPTH_PACKED\n" : "";
+  auto depth = gles::Program::fromEmbedded("shadow_depth.vert", "shadow_depth.frag", packed_define, error);
+  if (!depth) return false;
+  auto ground = gles::Program::fromEmbedded("ground_shadow.vert", "ground_shadow.frag",
+                                            packed_define + "#define MAX_LIGHTS " + std::to_string(lights_per_batch_) + "\n",
+                                            error);
+  if (!ground) return false;
+  std::string transfer_define;
+  if (settings.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma) transfer_define = "#define CAMERA_TRANSFER_GAMMA\n";
+  if (settings.camera_transfer.curve == ibl::CameraTransfer::Curve::kLinear) transfer_define = "#define CAMERA_TRANSFER_LINEAR\n";
+  auto composite = gles::Program::fromEmbedded("ground_composite.vert", "ground_composite.frag", transfer_define, error);
+  if (!composite) return false;
+  depth_program_ = std::move(*depth);
+  ground_program_ = std::move(*ground);
+  composite_program_ = std::move(*composite);
+  if (!quad_.init(error)) return false;
+
+  auto texture = gles::createTexture2D(settings.ground_texture_size_px, settings.ground_texture_size_px, GL_RGBA,
+                                       GL_UNSIGNED_BYTE, GL_LINEAR, nullptr, error);
+  if (!texture) return false;
+  ground_texture_ = std::move(*texture);
+  ground_framebuffer_ = gles::Framebuffer::create();
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_framebuffer_.id());
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ground_texture_.id(), 0);
+  const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (status != GL_FRAMEBUFFER_COMPLETE) {
+    error = "ground shadow texture framebuffer incomplete: " + gles::framebufferStatusName(status);
+    return false;
+  }
+
+  // The ground square's grid, in [0, 1]^2.
+  const int n = settings.region_mesh_segments;
+  std::vector<float> uv;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      uv.push_back(static_cast<float>(i) / n);
+      uv.push_back(static_cast<float>(j) / n);
+    }
+  std::vector<GLushort> indices;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const auto at = [&](int a, int b) { return static_cast<GLushort>(b * (n + 1) + a); };
+      indices.insert(indices.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  region_vertices_ = gles::Buffer::create();
+  glBindBuffer(GL_ARRAY_BUFFER, region_vertices_.id());
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uv.size() * sizeof(float)), uv.data(), GL_STATIC_DRAW);
+  region_indices_ = gles::Buffer::create();
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, region_indices_.id());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLushort)), indices.data(),
+               GL_STATIC_DRAW);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
+  region_index_count_ = static_cast<GLsizei>(indices.size());
+  caster_vertices_ = gles::Buffer::create();
+  return gles::checkGl("GroundShadow::init", error);
+}
+
+std::string GroundShadow::depthStorageDescription() const {
+  return packed_depth_ ? "depth packed in RGBA8 (16 bits in r, g)" : "OES_depth_texture";
+}
+
+bool GroundShadow::ensureShadowMaps(std::size_t count, std::string& error) {
+  const int size = settings_.shadow_map_size_px;
+  while (shadow_maps_.size() < count) {
+    ShadowMap map;
+    map.framebuffer = gles::Framebuffer::create();
+    if (packed_depth_) {
+      auto colour = gles::createTexture2D(size, size, GL_RGBA, GL_UNSIGNED_BYTE, GL_NEAREST, nullptr, error);
+      if (!colour) return false;
+      map.depth_or_colour = std::move(*colour);
+      map.depth_buffer = gles::Renderbuffer::create();
+      glBindRenderbuffer(GL_RENDERBUFFER, map.depth_buffer.id());
+      glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT16, size, size);
+      glBindFramebuffer(GL_FRAMEBUFFER, map.framebuffer.id());
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, map.depth_or_colour.id(), 0);
+      glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, map.depth_buffer.id());
+    } else {
+      map.depth_or_colour = gles::Texture::create();
+      glBindTexture(GL_TEXTURE_2D, map.depth_or_colour.id());
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT, size, size, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
+      glBindTexture(GL_TEXTURE_2D, 0);
+      glBindFramebuffer(GL_FRAMEBUFFER, map.framebuffer.id());
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, map.depth_or_colour.id(), 0);
+    }
+    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      error = "shadow map framebuffer (" + depthStorageDescription() + ") incomplete: " +
+              gles::framebufferStatusName(status);
+      return false;
+    }
+    if (!gles::checkGl("shadow map allocation", error)) return false;
+    shadow_maps_.push_back(std::move(map));
+  }
+  return true;
+}
+
+bool GroundShadow::drawCasterDepth(const glm::mat4& light_clip_from_world, std::string& error) {
+  depth_program_.use();
+  glUniformMatrix4fv(depth_program_.uniform("u_light_clip_from_world"), 1, GL_FALSE, glm::value_ptr(light_clip_from_world));
+  const GLint position = depth_program_.attribute("a_position_w");
+  glBindBuffer(GL_ARRAY_BUFFER, caster_vertices_.id());
+  glEnableVertexAttribArray(static_cast<GLuint>(position));
+  glVertexAttribPointer(static_cast<GLuint>(position), 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glDrawArrays(GL_TRIANGLES, 0, caster_vertex_count_);
+  glDisableVertexAttribArray(static_cast<GLuint>(position));
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  return gles::checkGl("shadow depth pass", error);
+}
+
+bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl::ShadowCaster& caster,
+                          std::string& error) {
+  shadow_passes_last_update_ = 0;
+  has_shadow_ = false;
+  if (lights.empty()) return true;
+  if (!ensureShadowMaps(lights.size(), error)) return false;
+  region_ = ibl::groundShadowRegion(caster, lights, settings_.max_region_half_size_m);
+
+  const std::vector<glm::vec3> triangles = casterTriangles(caster);
+  glBindBuffer(GL_ARRAY_BUFFER, caster_vertices_.id());
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(triangles.size() * sizeof(glm::vec3)), triangles.data(),
+               GL_DYNAMIC_DRAW);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  caster_vertex_count_ = static_cast<GLsizei>(triangles.size());
+
+  // 1. One depth map per light.
+  const glm::dvec3 centre = caster.boundingCentre();
+  const double radius = caster.boundingRadius();
+  std::vector<LightView> views;
+  const int size = settings_.shadow_map_size_px;
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);
+  // Each map keeps the object's far side as seen from the light (depth test
+  // GREATER over a map cleared to 0, "empty"): that is the surface nearest
+  // the ground behind it, so the occluder distance t that sets the penumbra
+  // (PCSS) is measured to where the light actually grazes past the object,
+  // not through it. With the near side, a ground point under a 7 cm sphere
+  // took its penumbra as if the sphere were a disc 7 cm higher, and came out
+  // lit under the object.
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_GREATER);
+  glDepthMask(GL_TRUE);
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    views.push_back(lightViewFor(lights[i].direction_w, centre, radius));
+    glBindFramebuffer(GL_FRAMEBUFFER, shadow_maps_[i].framebuffer.id());
+    glViewport(0, 0, size, size);
+    glClearColor(0.0f, 0.0f, 0.0f, 0.0f);  // packed: depth 0, "empty"
+    glClearDepthf(0.0f);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    if (!drawCasterDepth(glm::mat4(views.back().clip_from_world), error)) return false;
+    ++shadow_passes_last_update_;
+  }
+  glDisable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glClearDepthf(1.0f);
+
+  // 2. The ground's fraction, in batches of lights_per_batch_ shadow maps.
+  const int ground_size = settings_.ground_texture_size_px;
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_framebuffer_.id());
+  glViewport(0, 0, ground_size, ground_size);
+  ground_program_.use();
+  glUniform2f(ground_program_.uniform("u_region_centre_w"), static_cast<float>(region_.centre_w.x),
+              static_cast<float>(region_.centre_w.y));
+  glUniform1f(ground_program_.uniform("u_region_half_size_m"), static_cast<float>(region_.half_size_m));
+  glUniform1f(ground_program_.uniform("u_map_width_m"), static_cast<float>(views[0].width_m));
+  glUniform1f(ground_program_.uniform("u_depth_range_m"), static_cast<float>(views[0].depth_m));
+  glUniform1f(ground_program_.uniform("u_texel_uv"), 1.0f / static_cast<float>(size));
+  glUniform1f(ground_program_.uniform("u_bias01"), kBias01);
+  std::vector<float> taps;
+  for (int k = 0; k < kTaps; ++k) {
+    // Golden-angle spiral: even cover of the unit disc by equal areas.
+    const double r = std::sqrt((k + 0.5) / kTaps), phi = k * kPi * (3.0 - std::sqrt(5.0));
+    taps.push_back(static_cast<float>(r * std::cos(phi)));
+    taps.push_back(static_cast<float>(r * std::sin(phi)));
+  }
+  glUniform2fv(ground_program_.uniform("u_taps[0]"), kTaps, taps.data());
+  for (std::size_t first = 0; first < lights.size(); first += static_cast<std::size_t>(lights_per_batch_)) {
+    const std::size_t count = std::min(lights.size() - first, static_cast<std::size_t>(lights_per_batch_));
+    std::vector<GLint> units;
+    std::vector<float> matrices, shares, tans, gradients;
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t i = first + k;
+      glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(k));
+      glBindTexture(GL_TEXTURE_2D, shadow_maps_[i].depth_or_colour.id());
+      units.push_back(static_cast<GLint>(k));
+      const glm::mat4 m(views[i].clip_from_world);
+      matrices.insert(matrices.end(), glm::value_ptr(m), glm::value_ptr(m) + 16);
+      for (int c = 0; c < 3; ++c) shares.push_back(static_cast<float>(lights[i].share_rgb[c]));
+      tans.push_back(static_cast<float>(std::tan(std::min(lights[i].cone_radius_rad, 1.2))));
+      // On the ground z = 0, a step of the map's (right, up) by one uv (one
+      // frustum width) moves the depth by (right.z, up.z) / d.z widths; the
+      // frustum is as deep as it is wide.
+      const glm::dvec2 gradient = views[i].ground_depth_gradient_per_uv;
+      gradients.push_back(static_cast<float>(gradient.x));
+      gradients.push_back(static_cast<float>(gradient.y));
+    }
+    // Samplers past `count` still need a valid unit: the first map (never read).
+    for (std::size_t k = count; k < static_cast<std::size_t>(lights_per_batch_); ++k) units.push_back(0);
+    glUniform1iv(ground_program_.uniform("u_shadow_map[0]"), lights_per_batch_, units.data());
+    glUniformMatrix4fv(ground_program_.uniform("u_light_clip_from_world[0]"), static_cast<GLsizei>(count), GL_FALSE,
+                       matrices.data());
+    glUniform3fv(ground_program_.uniform("u_share[0]"), static_cast<GLsizei>(count), shares.data());
+    glUniform1fv(ground_program_.uniform("u_tan_cone[0]"), static_cast<GLsizei>(count), tans.data());
+    glUniform2fv(ground_program_.uniform("u_ground_gradient[0]"), static_cast<GLsizei>(count), gradients.data());
+    glUniform1i(ground_program_.uniform("u_light_count"), static_cast<GLint>(count));
+    const bool first_batch = first == 0;
+    glUniform1f(ground_program_.uniform("u_output_blocked"), first_batch ? 0.0f : 1.0f);
+    if (first_batch) {
+      glDisable(GL_BLEND);
+    } else {
+      glEnable(GL_BLEND);
+      glBlendEquation(GL_FUNC_REVERSE_SUBTRACT);  // destination - source
+      glBlendFunc(GL_ONE, GL_ONE);
+    }
+    quad_.draw(ground_program_.attribute("a_position"));
+  }
+  glDisable(GL_BLEND);
+  glBlendEquation(GL_FUNC_ADD);
+  for (int k = 0; k < lights_per_batch_; ++k) {
+    glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(k));
+    glBindTexture(GL_TEXTURE_2D, 0);
+  }
+  glActiveTexture(GL_TEXTURE0);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (!gles::checkGl("ground shadow pass", error)) return false;
+  has_shadow_ = true;
+  return true;
+}
+
+bool GroundShadow::drawOnCameraImage(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
+                                     const CameraFrameTexture& camera_frame, std::string& error) {
+  if (!has_shadow_) return true;
+  composite_program_.use();
+  glUniform2f(composite_program_.uniform("u_region_centre_w"), static_cast<float>(region_.centre_w.x),
+              static_cast<float>(region_.centre_w.y));
+  glUniform1f(composite_program_.uniform("u_region_half_size_m"), static_cast<float>(region_.half_size_m));
+  const glm::mat3 rotation(pose.R_cam_from_world);
+  glUniformMatrix3fv(composite_program_.uniform("u_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
+  glUniform3f(composite_program_.uniform("u_translation_cam_from_world"), static_cast<float>(pose.t_cam_from_world.x),
+              static_cast<float>(pose.t_cam_from_world.y), static_cast<float>(pose.t_cam_from_world.z));
+  glUniform4f(composite_program_.uniform("u_distortion"), static_cast<float>(camera.distortion[0]),
+              static_cast<float>(camera.distortion[1]), static_cast<float>(camera.distortion[2]),
+              static_cast<float>(camera.distortion[3]));
+  glUniform1f(composite_program_.uniform("u_distortion_k3"), static_cast<float>(camera.distortion[4]));
+  glUniform2f(composite_program_.uniform("u_focal_px"), static_cast<float>(camera.fx_px), static_cast<float>(camera.fy_px));
+  glUniform2f(composite_program_.uniform("u_principal_px"), static_cast<float>(camera.cx_px),
+              static_cast<float>(camera.cy_px));
+  glUniform2f(composite_program_.uniform("u_image_size_px"), static_cast<float>(camera.width_px),
+              static_cast<float>(camera.height_px));
+  if (settings_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma)
+    glUniform1f(composite_program_.uniform("u_camera_gamma"), static_cast<float>(settings_.camera_transfer.gamma));
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, camera_frame.texture());
+  glUniform1i(composite_program_.uniform("u_camera"), 0);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, ground_texture_.id());
+  glUniform1i(composite_program_.uniform("u_fraction"), 1);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);
+  const GLint uv = composite_program_.attribute("a_region_uv");
+  glBindBuffer(GL_ARRAY_BUFFER, region_vertices_.id());
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, region_indices_.id());
+  glEnableVertexAttribArray(static_cast<GLuint>(uv));
+  glVertexAttribPointer(static_cast<GLuint>(uv), 2, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glDrawElements(GL_TRIANGLES, region_index_count_, GL_UNSIGNED_SHORT, nullptr);
+  glDisableVertexAttribArray(static_cast<GLuint>(uv));
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  return gles::checkGl("ground shadow composite", error);
+}
+
+std::optional<std::vector<glm::vec3>> GroundShadow::readFraction(std::string& error) const {
+  const int n = settings_.ground_texture_size_px;
+  std::vector<std::uint8_t> rgba(static_cast<std::size_t>(n) * n * 4);
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_framebuffer_.id());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, n, n, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (!gles::checkGl("ground shadow read-back", error)) return std::nullopt;
+  std::vector<glm::vec3> fraction(static_cast<std::size_t>(n) * n);
+  for (std::size_t i = 0; i < fraction.size(); ++i)
+    fraction[i] = glm::vec3(rgba[i * 4], rgba[i * 4 + 1], rgba[i * 4 + 2]) / 255.0f;
+  return fraction;
+}
+
+glm::dvec2 GroundShadow::groundPointOfTexel(int i, int j) const {
+  const double n = settings_.ground_texture_size_px;
+  return region_.centre_w + region_.half_size_m * glm::dvec2((2.0 * i + 1.0) / n - 1.0, (2.0 * j + 1.0) / n - 1.0);
+}
+
+}  // namespace probelight::pipeline

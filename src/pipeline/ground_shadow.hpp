@@ -1,0 +1,115 @@
+// Stage 5: soft shadows of the virtual object on the real ground, from the
+// dome of lights (ibl/ground_shadow.hpp has the model and its CPU reference).
+//
+// update() renders, for each light, the object's depth seen from the light
+// (an orthographic shadow map: OES_depth_texture where present, depth packed
+// into RGBA8 otherwise), then the ground's light fraction into a texture
+// laid on the square of ground the shadows can reach. Both are kept until the
+// lights or the object change: a still scene renders no shadow map. Every
+// frame, drawOnCameraImage() multiplies the camera pixels under that square
+// by the fraction (ratio-form differential rendering).
+//
+// Lights go through the ground pass in batches of as many shadow maps as the
+// fragment shader has texture units (at most 8): the first batch writes
+// 1 - blocked, the later ones subtract theirs (GL_FUNC_REVERSE_SUBTRACT).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/types.hpp"
+#include "gles/capabilities.hpp"
+#include "gles/gl_objects.hpp"
+#include "ibl/color_transfer.hpp"
+#include "ibl/ground_shadow.hpp"
+#include "pipeline/camera_frame_texture.hpp"
+
+namespace probelight::pipeline {
+
+struct GroundShadowSettings {
+  int shadow_map_size_px = 256;       // the object's bounding sphere fills it: 0.3 mm texels for a 7 cm sphere
+  int ground_texture_size_px = 256;   // over the square the shadows reach
+  double max_region_half_size_m = 0.5;  // lights near the horizon cast shadows this far at most
+  int region_mesh_segments = 32;      // the square's grid for the lens distortion in the composite
+  bool force_packed_depth = false;    // use the RGBA8 path even with OES_depth_texture (tests, comparison)
+  ibl::CameraTransfer camera_transfer;  // how the camera's bytes decode to light
+};
+
+class GroundShadow {
+ public:
+  bool init(const gles::Capabilities& capabilities, const GroundShadowSettings& settings, std::string& error);
+
+  // Renders the shadow maps and the ground fraction for these lights and
+  // this object. An empty `lights` clears the shadow (nothing is drawn).
+  // Leaves the default framebuffer bound with the viewport unset: callers
+  // re-bind their target.
+  bool update(const std::vector<ibl::ShadowLight>& lights, const ibl::ShadowCaster& caster, std::string& error);
+
+  // Multiplies the camera pixels under the ground square by the fraction, in
+  // the bound framebuffer (which holds the camera background, drawn 1:1).
+  // Nothing when there is no shadow.
+  bool drawOnCameraImage(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
+                         const CameraFrameTexture& camera_frame, std::string& error);
+
+  bool hasShadow() const { return has_shadow_; }
+  const ibl::GroundRegion& region() const { return region_; }
+  int shadowPassesLastUpdate() const { return shadow_passes_last_update_; }
+  bool packedDepth() const { return packed_depth_; }
+  int lightsPerBatch() const { return lights_per_batch_; }
+  std::string depthStorageDescription() const;
+
+  // The ground texture read back: fraction per texel, row-major from the
+  // region's -x, -y corner (texel (i, j) at groundPointOfTexel(i, j)).
+  std::optional<std::vector<glm::vec3>> readFraction(std::string& error) const;
+  glm::dvec2 groundPointOfTexel(int i, int j) const;
+  int groundTextureSizePx() const { return settings_.ground_texture_size_px; }
+
+ private:
+  struct ShadowMap {
+    gles::Texture depth_or_colour;  // sampled: the depth texture, or the RGBA8 packed colour
+    gles::Renderbuffer depth_buffer;  // packed path: depth for the depth test
+    gles::Framebuffer framebuffer;
+  };
+  bool ensureShadowMaps(std::size_t count, std::string& error);
+  bool drawCasterDepth(const glm::mat4& light_clip_from_world, std::string& error);
+
+  GroundShadowSettings settings_;
+  bool packed_depth_ = false;
+  int lights_per_batch_ = 8;
+  gles::Program depth_program_;
+  gles::Program ground_program_;
+  gles::Program composite_program_;
+  gles::FullScreenQuad quad_;
+  std::vector<ShadowMap> shadow_maps_;
+  gles::Texture ground_texture_;
+  gles::Framebuffer ground_framebuffer_;
+  gles::Buffer caster_vertices_;
+  GLsizei caster_vertex_count_ = 0;
+  gles::Buffer region_vertices_;
+  gles::Buffer region_indices_;
+  GLsizei region_index_count_ = 0;
+  ibl::GroundRegion region_;
+  bool has_shadow_ = false;
+  int shadow_passes_last_update_ = 0;
+};
+
+// The orthographic light view of a directional light that holds a bounding
+// sphere (centre, radius) with a little margin: clip = M (x_w, 1). Its
+// frustum is `width_m` across and `depth_m` deep, starting just outside the
+// sphere on the light's side.
+struct LightView {
+  glm::dmat4 clip_from_world{1.0};
+  double width_m = 0.0;
+  double depth_m = 0.0;
+  glm::dvec2 ground_depth_gradient_per_uv{0.0};  // d(depth01) / d(uv) of the ground plane z = 0
+};
+LightView lightViewFor(const glm::dvec3& direction_w, const glm::dvec3& centre_w, double radius_m);
+
+// The object as triangles (3 vertices each), W metres: a sphere of
+// `segments` around (segments / 2 rings), or a box's 12 triangles.
+std::vector<glm::vec3> casterTriangles(const ibl::ShadowCaster& caster, int segments = 48);
+
+}  // namespace probelight::pipeline
