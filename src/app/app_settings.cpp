@@ -106,6 +106,27 @@ AppSettings loadAppSettings(const std::string& path) {
       updates.readDouble("smoothing_new_weight", policy.smoothing_new_weight, Range::openClosed(0.0, 1.0));
   updates.rejectUnknownFields();
 
+  ConfigReader lights = file.section("lights");
+  LightsConfig& light_settings = settings.lights;
+  light_settings.dome.light_count = lights.readInt("count", light_settings.dome.light_count, Range::closed(1, 64));
+  const std::string placement = lights.readString("placement", "clustered", {"clustered", "median_cut", "fixed"});
+  light_settings.dome.placement = placement == "fixed"        ? ibl::DomePlacement::kFixedRegions
+                                  : placement == "median_cut" ? ibl::DomePlacement::kMedianCut
+                                                              : ibl::DomePlacement::kClustered;
+  light_settings.fade_s = lights.readDouble("fade_s", light_settings.fade_s, Range::closed(0.0, 60.0));
+  light_settings.shadows = lights.readBool("shadows", light_settings.shadows);
+  light_settings.shadow_map_size_px =
+      lights.readInt("shadow_map_size", light_settings.shadow_map_size_px, Range::closed(16, 4096));
+  light_settings.ground_texture_size_px =
+      lights.readInt("ground_texture_size", light_settings.ground_texture_size_px, Range::closed(16, 4096));
+  light_settings.max_shadow_reach_m =
+      lights.readDouble("max_shadow_reach", light_settings.max_shadow_reach_m, Range::openClosed(0.0, 100.0));
+  light_settings.refit_when_light_changes =
+      lights.readBool("refit_when_light_changes", light_settings.refit_when_light_changes);
+  light_settings.refit_change_fraction =
+      lights.readDouble("refit_change_fraction", light_settings.refit_change_fraction, Range::openClosed(0.0, 10.0));
+  lights.rejectUnknownFields();
+
   ConfigReader refinement = file.section("probe_refinement");
   settings.probe_refinement.enabled = refinement.readBool("enabled", settings.probe_refinement.enabled);
   settings.probe_refinement.weight =

@@ -8,6 +8,7 @@
 
 #include "app/lighting_state_machine.hpp"
 #include "app/map_update_policy.hpp"
+#include "ibl/light_dome.hpp"
 #include "pipeline/environment_maps.hpp"
 #include "tracking/pose_smoother.hpp"
 
@@ -45,6 +46,21 @@ struct ProbeRefinementConfig {
   double weight = 0.1;  // each frame's fit moves the correction this far toward it (30 frames: 96% of the way)
 };
 
+// The dome of shadow-casting lights (ibl/light_dome.hpp) and the ground
+// shadow (pipeline/ground_shadow.hpp).
+struct LightsConfig {
+  ibl::LightDomeSettings dome;  // count 8, clustered placement
+  double fade_s = 0.5;          // new lights move and fade in over this long
+  bool shadows = true;
+  int shadow_map_size_px = 256;
+  int ground_texture_size_px = 256;
+  double max_shadow_reach_m = 0.5;  // from the object, for lights near the horizon
+  // Refit the lights when the ground's irradiance in the maps moves by more
+  // than refit_change_fraction since the last fit (a lamp switched on).
+  bool refit_when_light_changes = false;
+  double refit_change_fraction = 0.25;
+};
+
 struct ObjectConfig {
   double radius_m = 0.035;             // a sphere resting on the ground
   glm::dvec2 position_w{0.0, 0.0};     // where it rests, in W (metres)
@@ -79,6 +95,7 @@ struct AppSettings {
   RecalibrationPolicy recalibration;
   MapUpdateSettings map_updates;  // when the maps are rebuilt (map_update_policy.hpp)
   ProbeRefinementConfig probe_refinement;
+  LightsConfig lights;
   SimConfig sim;
   int save_every = 1;     // write every K-th composited frame; 0 = none
   bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)

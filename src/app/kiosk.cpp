@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "app/app_settings.hpp"
+#include "app/light_transition.hpp"
 #include "app/lighting_state_machine.hpp"
 #include "app/map_update_policy.hpp"
 #include "app/run_report.hpp"
@@ -33,6 +34,7 @@
 #include "input/button_source.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
+#include "pipeline/ground_shadow.hpp"
 #include "pipeline/object_compositor.hpp"
 #include "sim/world.hpp"
 #include "tracking/pose_smoother.hpp"
@@ -301,8 +303,10 @@ class Kiosk {
 
     if (!frame_texture_.init(capabilities_, error) ||
         !maps_.init(capabilities_, environmentMapSettings(settings), error) ||
-        !compositor_.init(capabilities_, pipeline::ObjectCompositorSettings{}, maps_.storage(), error))
+        !compositor_.init(capabilities_, pipeline::ObjectCompositorSettings{}, maps_.storage(), error) ||
+        (settings.lights.shadows && !ground_shadow_.init(capabilities_, groundShadowSettings(settings), error)))
       return fail(1, "GPU set-up failed: " + error);
+    light_transition_ = LightTransition(settings.lights.fade_s);
     return 0;
   }
 
@@ -368,6 +372,7 @@ class Kiosk {
       gpuDone();
     }
 
+    frame_time_s_ = static_cast<double>(frame.metadata.timestamp_ns) * 1e-9;
     tracking::TagTrackResult track;
     {
       StageTimer timer(report_, "detect_pose");
@@ -421,6 +426,7 @@ class Kiosk {
     if (decision.update) {
       if (const int failed = updateMaps(view, rig.probe_reflectance, decision.new_weight); failed != 0) return failed;
       maps_view_ = view;
+      if (const int failed = checkLightChange(frame_number); failed != 0) return failed;
     } else {
       report_.recordStageSkip("probe_to_cube", toString(decision.skip));
       report_.recordStageSkip(diffuseStageName(), toString(decision.skip));
@@ -447,6 +453,7 @@ class Kiosk {
       report_.count("frames_recalibrating");
     }
 
+    if (const int failed = updateShadows(); failed != 0) return failed;
     if (const int failed = renderAndPresent(track, status, frame_number); failed != 0) return failed;
 
     if (frame.metadata.truth) {
@@ -548,19 +555,95 @@ class Kiosk {
     std::vector<float> validity;
     const std::optional<ibl::CubeMapRGB> reflection = maps_.readReflection(error, &validity);
     if (!reflection) return fail(1, error);
-    const std::vector<ibl::DomeLight> dome = ibl::fitLightDome(*reflection, &validity);
-    const ibl::DominantLight light =
-        ibl::findDominantLight(*reflection, &validity, dome, 1.0 / inputs_.rig.probe_reflectance);
+    const LightsConfig& config = inputs_.settings.lights;
+    std::vector<ibl::DomeLight> dome;
+    ibl::DominantLight light;
+    {
+      StageTimer timer(report_, "fit_lights");
+      dome = ibl::fitLightDome(*reflection, &validity, config.dome);
+      light = ibl::findDominantLight(*reflection, &validity, dome, 1.0 / inputs_.rig.probe_reflectance, config.dome);
+    }
+    light_transition_.retarget(dome, frame_time_s_);
+    lights_fitted_e_up_ = ibl::domeIrradiance(dome, {0.0, 0.0, 1.0});
     lighting_.highlight_direction_w = glm::vec3(light.direction_w);
     lighting_.highlight_rgb = glm::vec3(light.rgb);
     report_.count("calibrations_completed");
-    report_.extra["lights"]["dominant_light"] = {
-        {"direction", {light.direction_w.x, light.direction_w.y, light.direction_w.z}},
-        {"rgb", {light.rgb.r, light.rgb.g, light.rgb.b}},
-        {"frame", frame_number}};
+    nlohmann::json lights = nlohmann::json::array();
+    for (const ibl::DomeLight& l : dome)
+      lights.push_back({{"direction", {l.direction_w.x, l.direction_w.y, l.direction_w.z}},
+                        {"rgb", {l.rgb.r, l.rgb.g, l.rgb.b}},
+                        {"spread_deg", glm::degrees(l.spread_rad)}});
+    report_.extra["lights"] = {{"frame", frame_number},
+                               {"placement", ibl::toString(config.dome.placement)},
+                               {"lights", lights},
+                               {"dominant_light",
+                                {{"direction", {light.direction_w.x, light.direction_w.y, light.direction_w.z}},
+                                 {"rgb", {light.rgb.r, light.rgb.g, light.rgb.b}},
+                                 {"from_clipped_region", light.from_clipped_region}}}};
     if (!options_.quiet)
-      log_ << "probelight: frame " << frame_number << ": lights recalibrated, dominant light toward "
-           << formatVector(light.direction_w) << " rgb " << formatVector(light.rgb) << "\n";
+      log_ << "probelight: frame " << frame_number << ": lights recalibrated (" << dome.size() << ", "
+           << ibl::toString(config.dome.placement) << "), dominant light toward " << formatVector(light.direction_w)
+           << " rgb " << formatVector(light.rgb) << "\n";
+    return 0;
+  }
+
+  // lights.refit_when_light_changes: every 10th map update, the ground's
+  // irradiance in the diffuse map against the one the lights were fitted to;
+  // a large change (a lamp switched on or off) starts a recalibration.
+  int checkLightChange(std::uint64_t frame_number) {
+    const LightsConfig& config = inputs_.settings.lights;
+    if (!config.refit_when_light_changes || machine_.state() != AppState::kRunning || light_transition_.empty() ||
+        ++map_updates_since_light_check_ < 10)
+      return 0;
+    map_updates_since_light_check_ = 0;
+    std::string error;
+    const std::optional<ibl::CubeMapRGB> diffuse = maps_.readDiffuse(error);
+    if (!diffuse) return fail(1, error);
+    const glm::dvec3 e_up = glm::dvec3(diffuse->sampleBilinear({0.0, 0.0, 1.0})) * 3.14159265358979323846;
+    const double before = 0.2126 * lights_fitted_e_up_.r + 0.7152 * lights_fitted_e_up_.g + 0.0722 * lights_fitted_e_up_.b;
+    const double now = 0.2126 * e_up.r + 0.7152 * e_up.g + 0.0722 * e_up.b;
+    if (before > 0.0 && std::abs(now - before) > config.refit_change_fraction * before) {
+      report_.count("refits_for_light_change");
+      if (!options_.quiet)
+        log_ << "probelight: frame " << frame_number << ": the light changed by " << std::fixed << std::setprecision(0)
+             << 100.0 * (now - before) / before << "%: recalibrating\n";
+      machine_.onButtonPress();
+    }
+    return 0;
+  }
+
+  // The shadow maps and the ground's fraction follow the lights shown now
+  // (fading after a recalibration) and the object: re-rendered only when
+  // either changed, so a still scene renders no shadow map.
+  int updateShadows() {
+    if (!inputs_.settings.lights.shadows || light_transition_.empty()) return 0;
+    const std::vector<ibl::ShadowLight> lights = ibl::groundShadowLights(light_transition_.at(frame_time_s_));
+    ibl::ShadowCaster caster;
+    caster.position_w = glm::dvec2(object_center_w_);
+    caster.radius_m = inputs_.settings.object.radius_m;
+    const bool same = shadows_drawn_ && lights.size() == shadow_lights_.size() &&
+                      std::equal(lights.begin(), lights.end(), shadow_lights_.begin(),
+                                 [](const ibl::ShadowLight& a, const ibl::ShadowLight& b) {
+                                   return a.direction_w == b.direction_w && a.share_rgb == b.share_rgb &&
+                                          a.cone_radius_rad == b.cone_radius_rad;
+                                 });
+    const int dome_size = static_cast<int>(light_transition_.target().size());
+    // Lights below the horizon or too faint never get a pass.
+    report_.count("shadow_lights_too_faint", std::max(0, dome_size - static_cast<int>(lights.size())));
+    if (same) {
+      report_.count("shadow_passes_skipped", static_cast<long long>(lights.size()));
+      return 0;
+    }
+    std::string error;
+    {
+      StageTimer timer(report_, "shadows");
+      if (!ground_shadow_.update(lights, caster, error)) return fail(1, error);
+      gpuDone();
+    }
+    report_.count("shadow_passes_run", ground_shadow_.shadowPassesLastUpdate());
+    report_.count("shadow_updates");
+    shadow_lights_ = lights;
+    shadows_drawn_ = true;
     return 0;
   }
 
@@ -571,6 +654,9 @@ class Kiosk {
       StageTimer timer(report_, "render");
       display_->beginFrame();
       compositor_.drawCameraBackground(frame_texture_);
+      // The shadow first: the object then covers the part of it under itself.
+      if (track.found && have_maps_ && !ground_shadow_.drawOnCameraImage(camera, track.pose, frame_texture_, error))
+        return fail(1, error);
       // Before the first maps exist the object would be black: leave it out.
       if (track.found && have_maps_ &&
           !compositor_.drawSphereObject(camera, track.pose, object_center_w_, inputs_.settings.object.radius_m,
@@ -681,6 +767,13 @@ class Kiosk {
   pipeline::ObjectCompositor compositor_;
   std::unique_ptr<tracking::TagTracker> tracker_;
   std::unique_ptr<tracking::PoseSmoother> smoother_;
+  pipeline::GroundShadow ground_shadow_;
+  LightTransition light_transition_;
+  double frame_time_s_ = 0.0;  // of the frame being processed, from its timestamp
+  glm::dvec3 lights_fitted_e_up_{0.0};  // the ground's irradiance when the lights were last fitted
+  std::vector<ibl::ShadowLight> shadow_lights_;  // what the shadow maps show
+  bool shadows_drawn_ = false;
+  int map_updates_since_light_check_ = 0;
   std::map<std::string, long long> tag_status_frames_;
   nlohmann::json last_tag_problem_;  // null until a frame's tag is not usable
   // probe_refinement's correction of rig.yaml's ball, and its record.

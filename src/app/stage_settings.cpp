@@ -37,3 +37,16 @@ ibl::SurfaceMaterial objectMaterial(const AppSettings& settings) {
 }
 
 }  // namespace probelight
+
+namespace probelight {
+
+pipeline::GroundShadowSettings groundShadowSettings(const AppSettings& settings) {
+  pipeline::GroundShadowSettings shadow;
+  shadow.shadow_map_size_px = settings.lights.shadow_map_size_px;
+  shadow.ground_texture_size_px = settings.lights.ground_texture_size_px;
+  shadow.max_region_half_size_m = settings.lights.max_shadow_reach_m;
+  shadow.camera_transfer = settings.maps.stages.camera_transfer;
+  return shadow;
+}
+
+}  // namespace probelight

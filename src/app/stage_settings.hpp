@@ -8,6 +8,7 @@
 #include "core/types.hpp"
 #include "ibl/surface_shading.hpp"
 #include "pipeline/environment_maps.hpp"
+#include "pipeline/ground_shadow.hpp"
 #include "tracking/tag_detector.hpp"
 
 namespace probelight {
@@ -23,5 +24,9 @@ pipeline::EnvironmentMapSettings environmentMapSettings(const AppSettings& setti
 
 // The `object` section as the shading takes it.
 ibl::SurfaceMaterial objectMaterial(const AppSettings& settings);
+
+// The `lights` section's shadow settings, with the camera's transfer (the
+// composite decodes and re-encodes camera pixels).
+pipeline::GroundShadowSettings groundShadowSettings(const AppSettings& settings);
 
 }  // namespace probelight

@@ -8,11 +8,13 @@
 #include <mutex>
 #include <numbers>
 #include <thread>
+#include <unordered_map>
 
 #include <opencv2/calib3d.hpp>
 
 #include "sim/camera_path.hpp"
 #include "sim/environment.hpp"
+#include "sim/occluder.hpp"
 #include "sim/scene_geometry.hpp"
 #include "sim/tag_pattern.hpp"
 
@@ -208,6 +210,310 @@ double valueNoise(double x, double y, std::uint64_t salt) {
   return (a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty;
 }
 
+struct TruthGrid {
+  std::vector<glm::dvec3> hdr;      // camera linear units
+  std::vector<glm::dvec3> clipped;  // camera linear units, reflectance undone
+};
+
+// ---- Shadow truth of virtual occluders ----
+
+// The upper hemisphere is rows 0 .. kUpperRows-1 of the direction grid (row
+// kUpperRows starts exactly at the horizon).
+constexpr int kUpperRows = kGridHeight / 2;
+// A piece of sky cut by an occluder's outline is split kShadowSplit x
+// kShadowSplit: level 1 is a cell's own 3x3 sub-samples (as cellMean); a
+// level-1 piece still cut is split again while it carries more than
+// kShadowRefineShare of E_up, down to level kShadowMaxLevel (1/81 of a cell,
+// 0.009 deg). Only the sun and a lamp carry that much per piece, so their
+// shadow edges move smoothly with the ground point while the dim sky costs
+// one level. Each piece left cut is then decided by its centre, so the error
+// of a point is at most the share of its cut sky pieces (~3e-6 of E_up each).
+constexpr int kShadowSplit = 3;
+constexpr int kShadowMaxLevel = 4;
+constexpr double kShadowRefineShare = 1e-5;
+// renderWithOccluders: ground grids of exact shadow values, interpolated
+// bilinearly. Near an occluder (within 10 cm of its bounding sphere's axis)
+// the spacing is 2 mm, about two pixels at the default 0.6 m and under the
+// narrowest penumbra there (a 3 deg sun behind a few-cm object: ~2.5 mm).
+// Further out, shadows widen in proportion to the distance (a penumbra spans
+// >= 0.05 rad of the light as seen from the ground), so the spacing doubles
+// with each doubling of the distance: at most 4% of it.
+constexpr double kShadowNodeSpacing_m = 0.002;
+constexpr double kShadowFineReach_m = 0.10;
+constexpr int kShadowCoarsestLevel = 10;
+// Beyond this the ground is unshadowed whatever the light (guards the grid
+// index against rays that graze the horizon).
+constexpr double kShadowFarLimit_m = 1000.0;
+// Occluder shading: irradiance by normal at 64 azimuths x 32 polar angles,
+// bilinear. Irradiance is a cosine-lobe blur of the sky, smooth except where
+// a small sun sets: there the table's error reaches ~2% of the sun's part.
+constexpr int kIrradianceTableWidth = 64;
+constexpr int kIrradianceTableHeight = 32;
+
+// Where a piece of sky stands relative to one occluder's outline.
+enum class Visibility { kClear, kBlocked, kCut };
+
+// The directions from one ground point that hit one occluder.
+struct OccluderCone {
+  const VirtualOccluder* occluder = nullptr;
+  // The bounding sphere's cone: no direction outside it hits the occluder.
+  // For a sphere it is exactly the set of directions that hit.
+  glm::dvec3 axis{0.0, 0.0, 1.0};
+  double half_angle_rad = 0.0, cos_half = 1.0, sin_half = 0.0;
+  bool inside_bound = false;       // the point is inside the bounding sphere: no cone
+  bool blocks_everything = false;  // the point is inside (or on the bottom of) the occluder
+  // Box: inward unit normals of the planes through the point and the box's
+  // silhouette edges. The directions from a point to a convex body form a
+  // convex cone bounded by exactly those planes, so a direction hits the box
+  // iff it is on the inner side of all of them.
+  std::array<glm::dvec3, 12> planes{};
+  int plane_count = 0;
+};
+
+OccluderCone coneFrom(const VirtualOccluder& occluder, const glm::dvec3& point_w) {
+  OccluderCone cone;
+  cone.occluder = &occluder;
+  const OccluderBound bound = occluderBound(occluder);
+  const glm::dvec3 to_center = bound.center_w - point_w;
+  const double distance_m = glm::length(to_center);
+  if (distance_m <= bound.radius_m * (1.0 + 1e-12)) {
+    cone.inside_bound = true;
+    // A ground point inside a sphere resting on the ground is its contact
+    // point, whose whole upper hemisphere the sphere fills.
+    if (occluder.shape == VirtualOccluder::Shape::kSphere) cone.blocks_everything = true;
+  } else {
+    cone.axis = to_center / distance_m;
+    cone.sin_half = bound.radius_m / distance_m;
+    cone.cos_half = std::sqrt(1.0 - cone.sin_half * cone.sin_half);
+    cone.half_angle_rad = std::asin(cone.sin_half);
+  }
+  if (occluder.shape == VirtualOccluder::Shape::kSphere) return cone;
+
+  const glm::dvec3 half_m = 0.5 * occluder.box_size_m;
+  const glm::dvec3 q = boxLocalFromWorldDirection(occluder, point_w - boxCenterWorld(occluder));
+  // A face "faces" the point when the point is on or outside its plane. On
+  // the plane counts as facing, so that a point on the ground under the box
+  // (in the bottom face's plane) gets the ground plane as its only bound and
+  // a point touching a side face gets that face's plane: both exact.
+  auto faces = [&](int axis, double side) { return side * q[axis] >= half_m[axis]; };
+  bool any_facing = false;
+  for (int axis = 0; axis < 3; ++axis) any_facing = any_facing || faces(axis, -1.0) || faces(axis, 1.0);
+  if (!any_facing) {
+    cone.blocks_everything = true;
+    return cone;
+  }
+  // Silhouette edges: between a face that faces the point and one that does not.
+  for (int along = 0; along < 3; ++along) {
+    const int i = (along + 1) % 3, j = (along + 2) % 3;
+    for (double si : {-1.0, 1.0})
+      for (double sj : {-1.0, 1.0}) {
+        if (faces(i, si) == faces(j, sj)) continue;
+        glm::dvec3 a(0.0), b(0.0);
+        a[i] = b[i] = si * half_m[i];
+        a[j] = b[j] = sj * half_m[j];
+        a[along] = -half_m[along];
+        b[along] = half_m[along];
+        glm::dvec3 n = glm::cross(a - q, b - q);
+        const double length = glm::length(n);
+        if (!(length > 0.0)) continue;
+        n /= length;
+        if (glm::dot(n, -q) < 0.0) n = -n;  // the box's centre is on the inner side
+        cone.planes[static_cast<size_t>(cone.plane_count++)] = boxWorldFromLocalDirection(occluder, n);
+      }
+  }
+  return cone;
+}
+
+// Visibility of every direction within rho_rad of dir (unit) from the cone's point.
+Visibility classify(const OccluderCone& cone, const glm::dvec3& dir, double rho_rad, double sin_rho, double cos_rho) {
+  if (cone.blocks_everything) return Visibility::kBlocked;
+  if (!cone.inside_bound) {
+    const double c = glm::dot(dir, cone.axis);
+    // Angle to the axis > half + rho: the whole patch misses the bounding sphere.
+    if (c < cone.cos_half * cos_rho - cone.sin_half * sin_rho) return Visibility::kClear;
+    if (cone.occluder->shape == VirtualOccluder::Shape::kSphere) {
+      // Angle < half - rho: wholly inside the (exact) cone.
+      if (cone.half_angle_rad > rho_rad && c > cone.cos_half * cos_rho + cone.sin_half * sin_rho)
+        return Visibility::kBlocked;
+      return Visibility::kCut;
+    }
+  }
+  if (cone.occluder->shape == VirtualOccluder::Shape::kSphere) return Visibility::kCut;
+  if (cone.plane_count == 0) return Visibility::kCut;  // degenerate: let the ray test decide
+  // A patch of radius rho around dir is wholly on the inner side of a plane
+  // through the point iff n.dir > sin(rho), wholly outside iff n.dir < -sin(rho).
+  bool all_inside = true;
+  for (int k = 0; k < cone.plane_count; ++k) {
+    const double s = glm::dot(cone.planes[static_cast<size_t>(k)], dir);
+    if (s < -sin_rho) return Visibility::kClear;
+    if (s <= sin_rho) all_inside = false;
+  }
+  return all_inside ? Visibility::kBlocked : Visibility::kCut;
+}
+
+Visibility classifyAll(const std::vector<OccluderCone>& cones, const glm::dvec3& dir, double rho_rad, double sin_rho,
+                       double cos_rho) {
+  Visibility result = Visibility::kClear;
+  for (const OccluderCone& cone : cones) {
+    const Visibility v = classify(cone, dir, rho_rad, sin_rho, cos_rho);
+    if (v == Visibility::kBlocked) return v;
+    if (v == Visibility::kCut) result = v;
+  }
+  return result;
+}
+
+// Whether the ray from point_w along dir hits an occluder. The cone and plane
+// tests are exact for a single direction (rho = 0); the ray test settles the
+// measure-zero ties on an outline.
+bool blockedAlong(const std::vector<OccluderCone>& cones, const glm::dvec3& point_w, const glm::dvec3& dir) {
+  for (const OccluderCone& cone : cones) {
+    const Visibility v = classify(cone, dir, 0.0, 0.0, 1.0);
+    if (v == Visibility::kBlocked) return true;
+    if (v == Visibility::kCut && intersectOccluder(*cone.occluder, point_w, dir)) return true;
+  }
+  return false;
+}
+
+// Cells are first tested kColumnBlock at a time (a block's centre and
+// radius bound it as a whole), so that the runs wholly blocked or clear cost
+// one test and only blocks on an outline are tested cell by cell.
+constexpr int kColumnBlock = 16;
+constexpr int kBlocksPerRow = kGridWidth / kColumnBlock;
+
+// Per upper-hemisphere cell: its centre direction (the middle of its theta
+// and phi ranges), and per row an angular radius rho that bounds the distance
+// from the centre to any point of the cell (half the theta extent, then half
+// the phi extent along the widest parallel: a path, so an upper bound). The
+// same per block of kColumnBlock cells.
+struct UpperCellGeometry {
+  std::vector<glm::dvec3> centre_dirs;
+  std::array<double, kUpperRows> rho_rad{}, sin_rho{}, cos_rho{};
+  double max_rho_rad = 0.0;
+  std::vector<glm::dvec3> block_dirs;  // kBlocksPerRow per row
+  std::array<double, kUpperRows> block_rho_rad{}, block_sin_rho{}, block_cos_rho{};
+};
+
+const UpperCellGeometry& upperCellGeometry() {
+  static const UpperCellGeometry geometry = [] {
+    UpperCellGeometry g;
+    const auto& grid = directionGrid();
+    g.centre_dirs.resize(static_cast<size_t>(kGridWidth) * kUpperRows);
+    for (int row = 0; row < kUpperRows; ++row) {
+      const GridCell& first = grid[static_cast<size_t>(row) * kGridWidth];
+      const double rho = 0.5 * (first.theta1 - first.theta0) + 0.5 * (first.phi1 - first.phi0) * std::sin(first.theta1);
+      g.rho_rad[row] = rho;
+      g.sin_rho[row] = std::sin(rho);
+      g.cos_rho[row] = std::cos(rho);
+      g.max_rho_rad = std::max(g.max_rho_rad, rho);
+      const double block_rho = 0.5 * (first.theta1 - first.theta0) +
+                               0.5 * kColumnBlock * (first.phi1 - first.phi0) * std::sin(first.theta1);
+      g.block_rho_rad[row] = block_rho;
+      g.block_sin_rho[row] = std::sin(block_rho);
+      g.block_cos_rho[row] = std::cos(block_rho);
+      for (int block = 0; block < kBlocksPerRow; ++block) {
+        const double theta = 0.5 * (first.theta0 + first.theta1);
+        const double phi = -kPi + 2.0 * kPi * (block + 0.5) / kBlocksPerRow;
+        g.block_dirs.push_back({std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)});
+      }
+      for (int col = 0; col < kGridWidth; ++col) {
+        const GridCell& cell = grid[static_cast<size_t>(row) * kGridWidth + col];
+        const double theta = 0.5 * (cell.theta0 + cell.theta1), phi = 0.5 * (cell.phi0 + cell.phi1);
+        g.centre_dirs[static_cast<size_t>(row) * kGridWidth + col] = {std::sin(theta) * std::cos(phi),
+                                                                       std::sin(theta) * std::sin(phi), std::cos(theta)};
+      }
+    }
+    return g;
+  }();
+  return geometry;
+}
+
+// A cell's 3x3 level-1 pieces (the same sub-samples as cellMean): centre
+// directions per piece (cell-major, then theta, then phi), and per row and
+// piece row their exact cosine moment's z and angular radius. Most cut
+// pieces are level 1, so these are worth tabulating once.
+struct LevelOnePieces {
+  std::vector<glm::dvec3> dirs;
+  std::array<double, kUpperRows * kShadowSplit> moment_z{}, rho_rad{}, sin_rho{}, cos_rho{};
+};
+
+const LevelOnePieces& levelOnePieces() {
+  static const LevelOnePieces pieces = [] {
+    LevelOnePieces p;
+    const auto& grid = directionGrid();
+    constexpr int kPerCell = kShadowSplit * kShadowSplit;
+    p.dirs.resize(static_cast<size_t>(kGridWidth) * kUpperRows * kPerCell);
+    for (int row = 0; row < kUpperRows; ++row) {
+      const GridCell& first = grid[static_cast<size_t>(row) * kGridWidth];
+      const double dphi = (first.phi1 - first.phi0) / kShadowSplit;
+      for (int i = 0; i < kShadowSplit; ++i) {
+        const double t0 = first.theta0 + (first.theta1 - first.theta0) * i / kShadowSplit;
+        const double t1 = first.theta0 + (first.theta1 - first.theta0) * (i + 1) / kShadowSplit;
+        const size_t k = static_cast<size_t>(row) * kShadowSplit + i;
+        p.moment_z[k] = dphi * 0.5 * (std::sin(t1) * std::sin(t1) - std::sin(t0) * std::sin(t0));
+        p.rho_rad[k] = 0.5 * (t1 - t0) + 0.5 * dphi * std::sin(t1);
+        p.sin_rho[k] = std::sin(p.rho_rad[k]);
+        p.cos_rho[k] = std::cos(p.rho_rad[k]);
+      }
+      for (int col = 0; col < kGridWidth; ++col) {
+        const GridCell& cell = grid[static_cast<size_t>(row) * kGridWidth + col];
+        for (int i = 0; i < kShadowSplit; ++i)
+          for (int j = 0; j < kShadowSplit; ++j) {
+            const double theta = cell.theta0 + (cell.theta1 - cell.theta0) * (i + 0.5) / kShadowSplit;
+            const double phi = cell.phi0 + (cell.phi1 - cell.phi0) * (j + 0.5) / kShadowSplit;
+            p.dirs[(static_cast<size_t>(row) * kGridWidth + col) * kPerCell + i * kShadowSplit + j] = {
+                std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+          }
+      }
+    }
+    return p;
+  }();
+  return pieces;
+}
+
+// Camera-linear hdr radiance at every level-1 piece centre of the upper
+// hemisphere for one lighting state (float: 7 MB rather than 14).
+struct PieceRadiance {
+  std::vector<glm::vec3> hdr;
+};
+
+// Everything a shadow query needs that does not depend on the ground point.
+struct ShadowContext {
+  LightingState lighting;
+  std::shared_ptr<const TruthGrid> grid;
+  std::shared_ptr<const PieceRadiance> pieces;
+  glm::dvec3 e_up_hdr{0.0}, e_up_clipped{0.0};  // the grid's upper-hemisphere cosine integral, camera units
+  double refine_luminance = 0.0;                 // a cut piece carrying more than this is split again
+  std::array<glm::dvec3, kUpperRows> row_max_hdr{};  // per row, the largest cell radiance (for bounds)
+  std::vector<VirtualOccluder> occluders;
+};
+
+// Sums over the pieces of one cut cell, of moment_z * L: over the blocked
+// pieces and over all of them, hdr and clipped.
+struct PieceSums {
+  glm::dvec3 blocked_hdr{0.0}, whole_hdr{0.0}, blocked_clipped{0.0}, whole_clipped{0.0};
+};
+
+// renderWithOccluders' per-frame state: the shadow query, the occluders'
+// irradiance table, and the ground grid of shadow values filled on demand.
+struct OccluderFrame {
+  ShadowContext shadow;
+  std::vector<glm::dvec3> irradiance_by_normal;  // scene units, kIrradianceTableHeight rows (theta 0..pi) x width (phi)
+  mutable std::mutex node_mutex;
+  mutable std::unordered_map<std::uint64_t, glm::dvec3> node_fraction;  // hdr fraction by packed grid index
+
+  glm::dvec3 irradiance(const glm::dvec3& normal) const {
+    const double theta = std::acos(std::clamp(normal.z, -1.0, 1.0));
+    double phi = std::atan2(normal.y, normal.x) / (2.0 * kPi);
+    phi -= std::floor(phi);
+    const double fy = theta / kPi * (kIrradianceTableHeight - 1), fx = phi * kIrradianceTableWidth;
+    const int y0 = std::min(static_cast<int>(fy), kIrradianceTableHeight - 2);
+    const int x0 = static_cast<int>(fx) % kIrradianceTableWidth, x1 = (x0 + 1) % kIrradianceTableWidth;
+    const double v = fy - y0, u = fx - std::floor(fx);
+    auto at = [&](int y, int x) { return irradiance_by_normal[static_cast<size_t>(y) * kIrradianceTableWidth + x]; };
+    return (1 - v) * ((1 - u) * at(y0, x0) + u * at(y0, x1)) + v * ((1 - u) * at(y0 + 1, x0) + u * at(y0 + 1, x1));
+  }
+};
+
 struct FrameState {
   PoseCamFromWorld pose;
   glm::dmat3 world_from_cam;
@@ -215,11 +521,7 @@ struct FrameState {
   LightingState lighting;
   glm::dvec3 ground_radiance_per_albedo;              // E_up / pi
   std::array<glm::dvec3, kPostAzimuthSteps> post_radiance;  // by world azimuth of the post's normal
-};
-
-struct TruthGrid {
-  std::vector<glm::dvec3> hdr;      // camera linear units
-  std::vector<glm::dvec3> clipped;  // camera linear units, reflectance undone
+  const OccluderFrame* occluders = nullptr;           // renderWithOccluders only
 };
 
 }  // namespace
@@ -242,6 +544,7 @@ struct World::Impl {
 
   mutable std::mutex cache_mutex;
   mutable std::map<std::pair<std::int64_t, bool>, std::shared_ptr<const TruthGrid>> truth_cache;
+  mutable std::map<std::pair<std::int64_t, bool>, std::shared_ptr<const PieceRadiance>> piece_cache;
 
   LightingState lightingAt(std::uint64_t frame) const {
     LightingState state;
@@ -320,8 +623,9 @@ struct World::Impl {
     return groundAlbedo(point.x, point.y, object, tag_white) * fs.ground_radiance_per_albedo;
   }
 
-  // The first object a camera ray hits, and the distance to it (+inf for the environment).
-  double firstHit(const glm::dvec3& dir, const FrameState& fs, SceneObject& object) const {
+  // The first object a camera ray hits, and the distance to it (+inf for the
+  // environment); for an occluder, its index in fs.occluders.
+  double firstHit(const glm::dvec3& dir, const FrameState& fs, SceneObject& object, int* occluder_index = nullptr) const {
     const RigGeometry& rig = scene.rig;
     double t_best = std::numeric_limits<double>::infinity();
     object = SceneObject::kEnvironment;
@@ -342,6 +646,15 @@ struct World::Impl {
         object = SceneObject::kFloor;
       }
     }
+    if (fs.occluders) {
+      const std::vector<VirtualOccluder>& occluders = fs.occluders->shadow.occluders;
+      for (size_t i = 0; i < occluders.size(); ++i)
+        if (auto t = intersectOccluder(occluders[i], fs.eye, dir); t && *t < t_best) {
+          t_best = *t;
+          object = SceneObject::kOccluder;
+          if (occluder_index) *occluder_index = static_cast<int>(i);
+        }
+    }
     return t_best;
   }
 
@@ -350,17 +663,20 @@ struct World::Impl {
   // enough at the pixel scale for regular sub-samples.
   std::uint8_t edgeClass(const glm::dvec3& dir, const FrameState& fs) const {
     SceneObject object;
-    double t = firstHit(dir, fs, object);
+    int occluder = -1;
+    double t = firstHit(dir, fs, object, &occluder);
     bool white = false;
     if (object == SceneObject::kFloor) {
       glm::dvec3 p = fs.eye + t * dir;
       groundAlbedo(p.x, p.y, object, &white);
     }
-    return classOf(object, white);
+    return classOf(object, white, occluder);
   }
 
-  static std::uint8_t classOf(SceneObject object, bool tag_white) {
-    return static_cast<std::uint8_t>(static_cast<int>(object) | (tag_white ? 8 : 0));
+  // Two occluders seen one over the other are told apart by their index.
+  static std::uint8_t classOf(SceneObject object, bool tag_white, int occluder = -1) {
+    const int occluder_bits = object == SceneObject::kOccluder ? (std::min(occluder, 14) + 1) << 4 : 0;
+    return static_cast<std::uint8_t>(static_cast<int>(object) | (tag_white ? 8 : 0) | occluder_bits);
   }
 
   // Scene radiance along a camera ray, and the first object it hits (and, when
@@ -368,22 +684,34 @@ struct World::Impl {
   glm::dvec3 shadeCameraRay(const glm::dvec3& dir, const FrameState& fs, SceneObject& object,
                             std::uint8_t* edge_class = nullptr) const {
     bool white = false;
-    glm::dvec3 radiance = shadeHit(dir, fs, firstHit(dir, fs, object), object, white);
-    if (edge_class) *edge_class = classOf(object, white);
+    int occluder = -1;
+    const double t = firstHit(dir, fs, object, &occluder);
+    glm::dvec3 radiance = shadeHit(dir, fs, t, object, white, occluder);
+    if (edge_class) *edge_class = classOf(object, white, occluder);
     return radiance;
   }
 
   // Radiance of the first hit at distance t_best along dir; `object` floor
   // becomes tag where the tag is printed.
   glm::dvec3 shadeHit(const glm::dvec3& dir, const FrameState& fs, double t_best, SceneObject& object,
-                      bool& white) const {
+                      bool& white, int occluder_index = -1) const {
     const RigGeometry& rig = scene.rig;
     switch (object) {
       case SceneObject::kEnvironment:
         return environmentRadiance(dir, fs.lighting);
       case SceneObject::kFloor:
-      case SceneObject::kTag:
-        return groundRadiance(fs.eye + t_best * dir, fs, object, &white);
+      case SceneObject::kTag: {
+        const glm::dvec3 p = fs.eye + t_best * dir;
+        glm::dvec3 radiance = groundRadiance(p, fs, object, &white);
+        if (fs.occluders) radiance *= shadowFraction({p.x, p.y}, *fs.occluders);
+        return radiance;
+      }
+      case SceneObject::kOccluder: {
+        const VirtualOccluder& occluder = fs.occluders->shadow.occluders[static_cast<size_t>(occluder_index)];
+        glm::dvec3 normal(0.0, 0.0, 1.0);
+        intersectOccluder(occluder, fs.eye, dir, &normal);
+        return occluder.albedo * fs.occluders->irradiance(normal) / kPi;
+      }
       case SceneObject::kPost: {
         glm::dvec3 p = fs.eye + t_best * dir;
         double azimuth = std::atan2(p.y - rig.probe_center_w.y, p.x - rig.probe_center_w.x);
@@ -457,6 +785,340 @@ struct World::Impl {
     if (truth_cache.size() >= 16) truth_cache.clear();  // bounded memory (6 MB a state)
     truth_cache.emplace(key, grid);
     return grid;
+  }
+
+  // ---- Shadow truth ----
+
+  std::shared_ptr<const PieceRadiance> pieceRadiance(const LightingState& state) const {
+    const auto key = std::make_pair(static_cast<std::int64_t>(std::llround(state.environment_rotation_rad * 1e9)),
+                                    state.lamp_on);
+    {
+      std::lock_guard<std::mutex> lock(cache_mutex);
+      auto found = piece_cache.find(key);
+      if (found != piece_cache.end()) return found->second;
+    }
+    auto pieces = std::make_shared<PieceRadiance>();
+    const LevelOnePieces& geometry = levelOnePieces();
+    pieces->hdr.resize(geometry.dirs.size());
+    constexpr size_t kPerCell = kShadowSplit * kShadowSplit;
+    parallelRows(kUpperRows, std::max(1, scene.render_threads), [&](int r0, int r1, int) {
+      for (size_t i = static_cast<size_t>(r0) * kGridWidth * kPerCell; i < static_cast<size_t>(r1) * kGridWidth * kPerCell; ++i)
+        pieces->hdr[i] = glm::vec3(exposure * environmentRadiance(geometry.dirs[i], state));
+    });
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    if (piece_cache.size() >= 4) piece_cache.clear();  // bounded memory (7 MB a state)
+    piece_cache.emplace(key, pieces);
+    return pieces;
+  }
+
+  ShadowContext shadowContext(const LightingState& state, const std::vector<VirtualOccluder>& occluders) const {
+    ShadowContext context;
+    context.lighting = state;
+    context.grid = truthGrid(state);
+    context.pieces = pieceRadiance(state);
+    context.occluders = occluders;
+    // E_up from the same cells the blocked part is taken from, so that a
+    // point whose whole sky is blocked gets exactly 0. It equals
+    // exposure * groundIrradianceUp to the grid's ~1e-3 rotation error.
+    const auto& cells = directionGrid();
+    for (int row = 0; row < kUpperRows; ++row) {
+      glm::dvec3 row_max(0.0);
+      for (int col = 0; col < kGridWidth; ++col) {
+        const size_t i = static_cast<size_t>(row) * kGridWidth + col;
+        context.e_up_hdr += cells[i].moment.z * context.grid->hdr[i];
+        context.e_up_clipped += cells[i].moment.z * context.grid->clipped[i];
+        row_max = glm::max(row_max, context.grid->hdr[i]);
+      }
+      context.row_max_hdr[static_cast<size_t>(row)] = row_max;
+    }
+    context.refine_luminance = kShadowRefineShare * luminance(context.e_up_hdr);
+    return context;
+  }
+
+  // One piece of sky, already classified: split further if it is cut and
+  // bright enough, else counted whole, its blocked part decided by its centre.
+  void addPiece(Visibility v, double theta0, double theta1, double phi0, double phi1, int level, const glm::dvec3& dir,
+                double moment_z, const glm::dvec3& hdr, const glm::dvec3& point_w,
+                const std::vector<OccluderCone>& cones, const ShadowContext& context, PieceSums& sums) const {
+    if (v == Visibility::kCut && level < kShadowMaxLevel && moment_z * luminance(hdr) > context.refine_luminance) {
+      splitCutPiece(theta0, theta1, phi0, phi1, level + 1, point_w, cones, context, sums);
+      return;
+    }
+    const double reflectance = scene.rig.probe_reflectance;
+    const glm::dvec3 clipped = glm::min(hdr * reflectance, glm::dvec3(1.0)) / reflectance;
+    sums.whole_hdr += moment_z * hdr;
+    sums.whole_clipped += moment_z * clipped;
+    if (v == Visibility::kCut) v = blockedAlong(cones, point_w, dir) ? Visibility::kBlocked : Visibility::kClear;
+    if (v == Visibility::kBlocked) {
+      sums.blocked_hdr += moment_z * hdr;
+      sums.blocked_clipped += moment_z * clipped;
+    }
+  }
+
+  // A cut piece (theta0..theta1, phi0..phi1) of level >= 2 as kShadowSplit^2
+  // pieces with exact cosine moments and their own centre radiance.
+  void splitCutPiece(double theta0, double theta1, double phi0, double phi1, int level, const glm::dvec3& point_w,
+                     const std::vector<OccluderCone>& cones, const ShadowContext& context, PieceSums& sums) const {
+    for (int i = 0; i < kShadowSplit; ++i) {
+      const double t0 = theta0 + (theta1 - theta0) * i / kShadowSplit;
+      const double t1 = theta0 + (theta1 - theta0) * (i + 1) / kShadowSplit;
+      const double theta = 0.5 * (t0 + t1);
+      // z component of the piece's cosine moment per radian of phi
+      const double moment_z_per_phi = 0.5 * (std::sin(t1) * std::sin(t1) - std::sin(t0) * std::sin(t0));
+      for (int j = 0; j < kShadowSplit; ++j) {
+        const double p0 = phi0 + (phi1 - phi0) * j / kShadowSplit;
+        const double p1 = phi0 + (phi1 - phi0) * (j + 1) / kShadowSplit;
+        const double phi = 0.5 * (p0 + p1);
+        const glm::dvec3 dir{std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+        const double rho = 0.5 * (t1 - t0) + 0.5 * (p1 - p0) * std::sin(t1);
+        const glm::dvec3 hdr = exposure * environmentRadiance(dir, context.lighting);
+        const Visibility v = classifyAll(cones, dir, rho, std::sin(rho), std::cos(rho));
+        addPiece(v, t0, t1, p0, p1, level, dir, (p1 - p0) * moment_z_per_phi, hdr, point_w, cones, context, sums);
+      }
+    }
+  }
+
+  // A cut cell as its level-1 pieces, from the tabulated geometry and radiance.
+  void splitCutCell(size_t cell_index, int row, const glm::dvec3& point_w, const std::vector<OccluderCone>& cones,
+                    const ShadowContext& context, PieceSums& sums) const {
+    const LevelOnePieces& geometry = levelOnePieces();
+    const GridCell& cell = directionGrid()[cell_index];
+    constexpr size_t kPerCell = kShadowSplit * kShadowSplit;
+    for (int i = 0; i < kShadowSplit; ++i) {
+      const size_t k = static_cast<size_t>(row) * kShadowSplit + i;
+      const double t0 = cell.theta0 + (cell.theta1 - cell.theta0) * i / kShadowSplit;
+      const double t1 = cell.theta0 + (cell.theta1 - cell.theta0) * (i + 1) / kShadowSplit;
+      for (int j = 0; j < kShadowSplit; ++j) {
+        const size_t piece = cell_index * kPerCell + static_cast<size_t>(i * kShadowSplit + j);
+        const glm::dvec3& dir = geometry.dirs[piece];
+        const Visibility v = classifyAll(cones, dir, geometry.rho_rad[k], geometry.sin_rho[k], geometry.cos_rho[k]);
+        const double p0 = cell.phi0 + (cell.phi1 - cell.phi0) * j / kShadowSplit;
+        const double p1 = cell.phi0 + (cell.phi1 - cell.phi0) * (j + 1) / kShadowSplit;
+        addPiece(v, t0, t1, p0, p1, 1, dir, geometry.moment_z[k], glm::dvec3(context.pieces->hdr[piece]), point_w, cones,
+                 context, sums);
+      }
+    }
+  }
+
+  World::GroundShadowTruth shadowAt(const glm::dvec2& ground_point_w, const ShadowContext& context) const {
+    World::GroundShadowTruth result;
+    if (context.occluders.empty()) return result;
+    const glm::dvec3 point_w{ground_point_w.x, ground_point_w.y, 0.0};
+    const UpperCellGeometry& geometry = upperCellGeometry();
+    const auto& cells = directionGrid();
+    const double row_height_rad = kPi / kGridHeight;
+    std::vector<OccluderCone> cones;
+    cones.reserve(context.occluders.size());
+    // Only rows that a bounding cone (grown by a cell's radius) reaches.
+    int row_begin = kUpperRows, row_end = 0;
+    for (const VirtualOccluder& occluder : context.occluders) {
+      cones.push_back(coneFrom(occluder, point_w));
+      const OccluderCone& cone = cones.back();
+      if (cone.inside_bound || cone.blocks_everything) {
+        row_begin = 0;
+        row_end = kUpperRows;
+        continue;
+      }
+      const double theta_axis = std::acos(std::clamp(cone.axis.z, -1.0, 1.0));
+      const double reach = cone.half_angle_rad + geometry.max_rho_rad;
+      row_begin = std::min(row_begin, std::max(0, static_cast<int>(std::floor((theta_axis - reach) / row_height_rad))));
+      row_end = std::max(row_end, std::min(kUpperRows, static_cast<int>(std::floor((theta_axis + reach) / row_height_rad)) + 1));
+    }
+    glm::dvec3 blocked_hdr(0.0), blocked_clipped(0.0);
+    auto ratio = [](const glm::dvec3& part, const glm::dvec3& whole) {
+      glm::dvec3 r(0.0);
+      for (int c = 0; c < 3; ++c) r[c] = whole[c] > 0.0 ? part[c] / whole[c] : 0.0;
+      return r;
+    };
+    for (int row = row_begin; row < row_end; ++row) {
+      const size_t r = static_cast<size_t>(row);
+      for (int block = 0; block < kBlocksPerRow; ++block) {
+        const Visibility block_visibility =
+            classifyAll(cones, geometry.block_dirs[r * kBlocksPerRow + static_cast<size_t>(block)],
+                        geometry.block_rho_rad[r], geometry.block_sin_rho[r], geometry.block_cos_rho[r]);
+        if (block_visibility == Visibility::kClear) continue;
+        for (int col = block * kColumnBlock; col < (block + 1) * kColumnBlock; ++col) {
+          const size_t i = r * kGridWidth + static_cast<size_t>(col);
+          const Visibility v = block_visibility == Visibility::kBlocked
+                                   ? Visibility::kBlocked
+                                   : classifyAll(cones, geometry.centre_dirs[i], geometry.rho_rad[r],
+                                                 geometry.sin_rho[r], geometry.cos_rho[r]);
+          if (v == Visibility::kClear) continue;
+          const double moment_z = cells[i].moment.z;
+          if (v == Visibility::kBlocked) {
+            blocked_hdr += moment_z * context.grid->hdr[i];
+            blocked_clipped += moment_z * context.grid->clipped[i];
+            continue;
+          }
+          // Cut: the blocked share of the cell's own pieces, applied to the
+          // cell's cached radiance, so that a wholly blocked cell counts
+          // exactly as in E_up.
+          PieceSums sums;
+          splitCutCell(i, row, point_w, cones, context, sums);
+          blocked_hdr += moment_z * context.grid->hdr[i] * ratio(sums.blocked_hdr, sums.whole_hdr);
+          blocked_clipped += moment_z * context.grid->clipped[i] * ratio(sums.blocked_clipped, sums.whole_clipped);
+        }
+      }
+    }
+    // The clamp only absorbs rounding: blocked <= E_up cell by cell.
+    result.hdr = glm::clamp(glm::dvec3(1.0) - ratio(blocked_hdr, context.e_up_hdr), 0.0, 1.0);
+    result.clipped = glm::clamp(glm::dvec3(1.0) - ratio(blocked_clipped, context.e_up_clipped), 0.0, 1.0);
+    return result;
+  }
+
+  // Upper bound of 1 - hdr fraction at a ground point, per channel, without
+  // integrating: each occluder's blocked light is at most the brightest cell
+  // in the rows its cone can touch times the projected solid angle of the
+  // cone grown by a cell's diameter (the cells it can touch).
+  glm::dvec3 shadowDeficitBound(const glm::dvec2& ground_point_w, const ShadowContext& context) const {
+    const double max_rho = upperCellGeometry().max_rho_rad;
+    const double row_height_rad = kPi / kGridHeight;
+    glm::dvec3 bound(0.0);
+    for (const VirtualOccluder& occluder : context.occluders) {
+      const OccluderBound sphere = occluderBound(occluder);
+      const glm::dvec3 to_center = sphere.center_w - glm::dvec3(ground_point_w, 0.0);
+      const double distance_m = glm::length(to_center);
+      if (distance_m <= sphere.radius_m * (1.0 + 1e-9)) return glm::dvec3(std::numeric_limits<double>::infinity());
+      const double grown = std::asin(sphere.radius_m / distance_m) + 2.0 * max_rho;
+      const double elevation = std::asin(std::clamp(to_center.z / distance_m, -1.0, 1.0));
+      const double theta_low = kPi / 2 - (elevation + grown), theta_high = kPi / 2 - (elevation - grown);
+      const int row_begin = std::max(0, static_cast<int>(std::floor(theta_low / row_height_rad)));
+      const int row_end = std::min(kUpperRows, static_cast<int>(std::floor(theta_high / row_height_rad)) + 1);
+      glm::dvec3 brightest(0.0);
+      for (int row = row_begin; row < row_end; ++row) brightest = glm::max(brightest, context.row_max_hdr[static_cast<size_t>(row)]);
+      const double highest_cos = elevation + grown >= kPi / 2 ? 1.0 : std::sin(elevation + grown);
+      const double projected_solid_angle = 2.0 * kPi * (1.0 - std::cos(std::min(grown, kPi))) * highest_cos;
+      bound += brightest * projected_solid_angle;
+    }
+    for (int c = 0; c < 3; ++c) bound[c] = context.e_up_hdr[c] > 0.0 ? bound[c] / context.e_up_hdr[c] : 0.0;
+    return bound;
+  }
+
+  // The hdr fraction renderWithOccluders applies at a grid node: exact, with
+  // deficits under kIgnoredShadowDeficit dropped.
+  glm::dvec3 nodeFraction(const glm::dvec2& node_w, const ShadowContext& context) const {
+    auto negligible = [](const glm::dvec3& deficit) {
+      return deficit.r < World::kIgnoredShadowDeficit && deficit.g < World::kIgnoredShadowDeficit &&
+             deficit.b < World::kIgnoredShadowDeficit;
+    };
+    if (negligible(shadowDeficitBound(node_w, context))) return glm::dvec3(1.0);
+    const glm::dvec3 fraction = shadowAt(node_w, context).hdr;
+    return negligible(glm::dvec3(1.0) - fraction) ? glm::dvec3(1.0) : fraction;
+  }
+
+  // Hdr shadow fraction at a visible ground point for renderWithOccluders:
+  // bilinear in a grid of exact node values (2 mm near the occluders, coarser
+  // further out; filled on demand, shared by the threads). Nodes strictly
+  // inside a box's footprint are left out and the weights renormalised:
+  // there the true value (0) is not the limit of the visible ground's, which
+  // is ~0.5 at a wall's foot. Points whose bound says the deficit is
+  // negligible skip the grid altogether.
+  glm::dvec3 shadowFraction(const glm::dvec2& ground_point_w, const OccluderFrame& frame) const {
+    const ShadowContext& context = frame.shadow;
+    if (!(std::abs(ground_point_w.x) < kShadowFarLimit_m && std::abs(ground_point_w.y) < kShadowFarLimit_m))
+      return glm::dvec3(1.0);
+    const glm::dvec3 bound = shadowDeficitBound(ground_point_w, context);
+    if (bound.r < World::kIgnoredShadowDeficit && bound.g < World::kIgnoredShadowDeficit &&
+        bound.b < World::kIgnoredShadowDeficit)
+      return glm::dvec3(1.0);
+    double nearest_m = std::numeric_limits<double>::infinity();
+    for (const VirtualOccluder& occluder : context.occluders)
+      nearest_m = std::min(nearest_m, glm::length(ground_point_w - glm::dvec2(occluderBound(occluder).center_w)));
+    const int level = nearest_m < kShadowFineReach_m
+                          ? 0
+                          : std::min(kShadowCoarsestLevel, 1 + static_cast<int>(std::log2(nearest_m / kShadowFineReach_m)));
+    const double spacing_m = kShadowNodeSpacing_m * static_cast<double>(1 << level);
+    const double fx = ground_point_w.x / spacing_m, fy = ground_point_w.y / spacing_m;
+    const auto ix = static_cast<std::int64_t>(std::floor(fx)), iy = static_cast<std::int64_t>(std::floor(fy));
+    const double u = fx - static_cast<double>(ix), v = fy - static_cast<double>(iy);
+    std::array<std::uint64_t, 4> keys{};
+    std::array<glm::dvec2, 4> nodes{};
+    std::array<double, 4> weights{};
+    std::array<bool, 4> known{};
+    std::array<glm::dvec3, 4> values{};
+    for (int k = 0; k < 4; ++k) {
+      const std::int64_t nx = ix + (k & 1), ny = iy + (k >> 1);
+      // level in the top 8 bits, then 28 bits of each index (|x| < 1000 m
+      // is under 2^19 nodes at 2 mm)
+      constexpr std::uint64_t kIndexMask = (1ull << 28) - 1;
+      keys[k] = (static_cast<std::uint64_t>(level) << 56) | ((static_cast<std::uint64_t>(nx) & kIndexMask) << 28) |
+                (static_cast<std::uint64_t>(ny) & kIndexMask);
+      nodes[k] = glm::dvec2(static_cast<double>(nx), static_cast<double>(ny)) * spacing_m;
+      weights[k] = ((k & 1) ? u : 1.0 - u) * ((k >> 1) ? v : 1.0 - v);
+      for (const VirtualOccluder& occluder : context.occluders) {
+        if (occluder.shape != VirtualOccluder::Shape::kBox) continue;
+        const glm::dvec3 q = boxLocalFromWorldDirection(occluder, glm::dvec3(nodes[k], 0.0) - boxCenterWorld(occluder));
+        if (std::abs(q.x) < 0.5 * occluder.box_size_m.x && std::abs(q.y) < 0.5 * occluder.box_size_m.y) weights[k] = 0.0;
+      }
+    }
+    {
+      std::lock_guard<std::mutex> lock(frame.node_mutex);
+      for (int k = 0; k < 4; ++k) {
+        auto found = frame.node_fraction.find(keys[k]);
+        if (found != frame.node_fraction.end()) {
+          known[k] = true;
+          values[k] = found->second;
+        }
+      }
+    }
+    // Computed outside the lock; two threads may both compute a node, with
+    // the same result, so the frame stays deterministic.
+    for (int k = 0; k < 4; ++k) {
+      if (known[k] || weights[k] == 0.0) continue;
+      values[k] = nodeFraction(nodes[k], context);
+      std::lock_guard<std::mutex> lock(frame.node_mutex);
+      frame.node_fraction.emplace(keys[k], values[k]);
+    }
+    double weight_sum = 0.0;
+    glm::dvec3 fraction(0.0);
+    for (int k = 0; k < 4; ++k) {
+      weight_sum += weights[k];
+      fraction += weights[k] * values[k];
+    }
+    // All four nodes inside a footprint (a point at its very edge): exact.
+    if (!(weight_sum > 0.0)) return nodeFraction(ground_point_w, context);
+    return fraction / weight_sum;
+  }
+
+  std::unique_ptr<OccluderFrame> occluderFrame(const LightingState& state,
+                                               const std::vector<VirtualOccluder>& occluders) const {
+    auto frame = std::make_unique<OccluderFrame>();
+    frame->shadow = shadowContext(state, occluders);
+    frame->irradiance_by_normal.assign(static_cast<size_t>(kIrradianceTableWidth) * kIrradianceTableHeight, glm::dvec3(0.0));
+    const TruthGrid& grid = *frame->shadow.grid;
+    parallelRows(kIrradianceTableHeight, std::max(1, scene.render_threads), [&](int r0, int r1, int) {
+      for (int row = r0; row < r1; ++row) {
+        const double theta = kPi * row / (kIrradianceTableHeight - 1);
+        for (int col = 0; col < kIrradianceTableWidth; ++col) {
+          const double phi = 2.0 * kPi * col / kIrradianceTableWidth;
+          const glm::dvec3 normal{std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+          // World::irradiance's integral, back in scene units.
+          frame->irradiance_by_normal[static_cast<size_t>(row) * kIrradianceTableWidth + col] =
+              integrateCosine(grid.hdr, normal) / exposure;
+        }
+      }
+    });
+    return frame;
+  }
+
+  // render()'s sensor model for a prepared frame state.
+  void renderFrame(const FrameState& fs, std::uint64_t frame_index, ImageRGB8& out) const {
+    out.resize(scene.camera.width_px, scene.camera.height_px);
+    const double scale = exposure;
+    const float sigma = static_cast<float>(scene.noise_sigma_code);
+    const std::vector<float>& gaussian = gaussianTable();
+    const std::uint64_t frame_salt = splitMix64(scene.seed ^ splitMix64(frame_index));
+    std::uint8_t* pixels = out.pixels.data();
+    traceFrame(fs, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
+      // Noise is a function of (seed, frame, pixel) only, so threads and
+      // render order cannot change it.
+      std::uint64_t bits = splitMix64(frame_salt + pixel);
+      for (int c = 0; c < 3; ++c) {
+        float code = srgb.encode(sum[c] * scale);
+        if (sigma > 0.0f) code += sigma * gaussian[(bits >> (16 * c)) & 0xFFFF];
+        pixels[pixel * 3 + c] = static_cast<std::uint8_t>(std::clamp(std::lround(code), 0L, 255L));
+      }
+    });
   }
 
   // Ray through distorted pixel position (x - 0.5 + u, y - 0.5 + v), u, v in
@@ -656,24 +1318,66 @@ FrameTruth World::truth(std::uint64_t frame_index) const {
 
 void World::render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth) const {
   const Impl& w = *impl_;
-  const FrameState fs = w.frameState(frame_index);
-  out.resize(w.scene.camera.width_px, w.scene.camera.height_px);
-  const double scale = w.exposure;
-  const float sigma = static_cast<float>(w.scene.noise_sigma_code);
-  const std::vector<float>& gaussian = gaussianTable();
-  const std::uint64_t frame_salt = splitMix64(w.scene.seed ^ splitMix64(frame_index));
-  std::uint8_t* pixels = out.pixels.data();
-  w.traceFrame(fs, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
-    // Noise is a function of (seed, frame, pixel) only, so threads and
-    // render order cannot change it.
-    std::uint64_t bits = splitMix64(frame_salt + pixel);
-    for (int c = 0; c < 3; ++c) {
-      float code = w.srgb.encode(sum[c] * scale);
-      if (sigma > 0.0f) code += sigma * gaussian[(bits >> (16 * c)) & 0xFFFF];
-      pixels[pixel * 3 + c] = static_cast<std::uint8_t>(std::clamp(std::lround(code), 0L, 255L));
-    }
-  });
+  w.renderFrame(w.frameState(frame_index), frame_index, out);
   truth = this->truth(frame_index);
+}
+
+std::vector<World::GroundShadowTruth> World::groundShadow(const std::vector<glm::dvec2>& ground_points_w,
+                                                          const std::vector<VirtualOccluder>& occluders,
+                                                          std::uint64_t frame_index) const {
+  const Impl& w = *impl_;
+  std::vector<GroundShadowTruth> result(ground_points_w.size());
+  if (occluders.empty() || ground_points_w.empty()) return result;
+  const ShadowContext context = w.shadowContext(w.lightingAt(frame_index), occluders);
+  parallelRows(static_cast<int>(ground_points_w.size()), std::max(1, w.scene.render_threads), [&](int r0, int r1, int) {
+    for (int i = r0; i < r1; ++i) result[static_cast<size_t>(i)] = w.shadowAt(ground_points_w[static_cast<size_t>(i)], context);
+  });
+  return result;
+}
+
+void World::renderWithOccluders(std::uint64_t frame_index, const std::vector<VirtualOccluder>& occluders,
+                                ImageRGB8& out, FrameTruth& truth) const {
+  const Impl& w = *impl_;
+  FrameState fs = w.frameState(frame_index);
+  const std::unique_ptr<OccluderFrame> occluder_frame = w.occluderFrame(fs.lighting, occluders);
+  fs.occluders = occluder_frame.get();
+  w.renderFrame(fs, frame_index, out);
+  truth = this->truth(frame_index);
+
+  // The truth's visibility flags, now with the occluders in the way.
+  auto hidden = [&](const glm::dvec3& target_w) {
+    const glm::dvec3 to_target = target_w - fs.eye;
+    const double distance_m = glm::length(to_target);
+    for (const VirtualOccluder& occluder : occluders)
+      if (auto t = intersectOccluder(occluder, fs.eye, to_target / distance_m); t && *t < distance_m - 1e-9) return true;
+    return false;
+  };
+  if (truth.tag_fully_visible) {
+    // The same kind of check as tagFullyVisible: a grid over the printed square.
+    constexpr int kTagGrid = 21;
+    const double half_m = 0.5 * w.scene.rig.tag_size_m;
+    for (int i = 0; i < kTagGrid && truth.tag_fully_visible; ++i)
+      for (int j = 0; j < kTagGrid && truth.tag_fully_visible; ++j)
+        if (hidden({-half_m + 2.0 * half_m * i / (kTagGrid - 1), -half_m + 2.0 * half_m * j / (kTagGrid - 1), 0.0}))
+          truth.tag_fully_visible = false;
+  }
+  if (truth.probe_fully_visible) {
+    // The ball's outline: the circle where the tangent cone from the eye touches it.
+    const glm::dvec3& center = w.scene.rig.probe_center_w;
+    const double radius_m = w.scene.rig.probe_radius_m;
+    const glm::dvec3 to_center = center - fs.eye;
+    const double distance_m = glm::length(to_center);
+    const glm::dvec3 axis = to_center / distance_m;
+    const glm::dvec3 circle_center = center - (radius_m * radius_m / distance_m) * axis;
+    const double circle_radius_m = radius_m * std::sqrt(1.0 - radius_m * radius_m / (distance_m * distance_m));
+    const glm::dvec3 side = glm::normalize(glm::cross(axis, std::abs(axis.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
+    const glm::dvec3 up = glm::cross(axis, side);
+    constexpr int kOutlinePoints = 72;
+    for (int k = 0; k < kOutlinePoints && truth.probe_fully_visible; ++k) {
+      const double a = 2.0 * kPi * k / kOutlinePoints;
+      if (hidden(circle_center + circle_radius_m * (std::cos(a) * side + std::sin(a) * up))) truth.probe_fully_visible = false;
+    }
+  }
 }
 
 std::vector<float> World::coverage(std::uint64_t frame_index, SceneObject object) const {

@@ -23,11 +23,13 @@
 #include <glm/glm.hpp>
 
 #include "core/types.hpp"
+#include "sim/occluder.hpp"
 #include "sim/scene_config.hpp"
 
 namespace probelight::sim {
 
-enum class SceneObject : std::uint8_t { kEnvironment = 0, kFloor = 1, kTag = 2, kProbe = 3, kPost = 4 };
+// kOccluder: a VirtualOccluder, only in World::renderWithOccluders frames.
+enum class SceneObject : std::uint8_t { kEnvironment = 0, kFloor = 1, kTag = 2, kProbe = 3, kPost = 4, kOccluder = 5 };
 
 // In camera linear units. hdr: what an ideal sensor would integrate. clipped:
 // the same integral of min(L * exposure * reflectance, 1) / reflectance, i.e.
@@ -81,6 +83,47 @@ class World {
   // Per pixel (row-major), the fraction of the pixel's sub-samples whose
   // camera ray first hits `object`. Same rays as render().
   std::vector<float> coverage(std::uint64_t frame_index, SceneObject object) const;
+
+  // Fraction of the ground's irradiance that still arrives at each ground point
+  // (x, y, 0) when the occluders stand in the scene: 1 = unshadowed, per RGB channel.
+  // The ground's irradiance is the same upper-hemisphere integral that lights the
+  // simulated floor (environment + lamp, World::groundIrradianceUp), so
+  // fraction = 1 - (integral over directions blocked by an occluder of L cos) / E_up.
+  // hdr: with the true radiance; clipped: with what an 8-bit camera can know
+  // through the ball (the same per-cell clipped radiance as World::irradiance's
+  // `clipped`, i.e. min(L * exposure * reflectance, 1) / reflectance).
+  // Brute force over the simulator's 512x256 direction grid with exact cosine moments,
+  // testing each cell's visibility against the occluders.
+  // Cells cut by an occluder's outline are split 3x3 (as the irradiance's
+  // sub-samples), and pieces still cut and carrying more than 1e-5 of E_up
+  // (the sun, a lamp) 3x3 again, down to 1/81 of a cell (0.009 deg), so a
+  // sun's shadow edge is smooth. Thread-safe; uses scene().render_threads.
+  struct GroundShadowTruth { glm::dvec3 hdr{1.0}; glm::dvec3 clipped{1.0}; };
+  std::vector<GroundShadowTruth> groundShadow(const std::vector<glm::dvec2>& ground_points_w,
+                                              const std::vector<VirtualOccluder>& occluders,
+                                              std::uint64_t frame_index) const;
+  // The frame as if the occluders were real objects: render() plus the occluders
+  // (Lambertian, albedo, lit by the brute-force irradiance at their surface normal
+  // over the whole sphere of directions as World::irradiance computes it for the
+  // ball centre -- a stated approximation: the occluder is lit as if it stood at
+  // the ball, with no shadow from itself, another occluder or the rig) and the
+  // ground darkened by groundShadow's hdr fraction at each ground pixel's hit
+  // point. Same sensor model, noise and determinism as render(). Occluders hide
+  // what is behind them (tag, floor, ball, post); the ball's reflection and the
+  // post's lighting ignore them. Further approximations, each far below one
+  // code value or confined to a pixel: the shadow is interpolated bilinearly
+  // from a ground grid of exact values (2 mm within 10 cm of an occluder, its
+  // spacing at most 4% of the distance further out, where shadows are wider
+  // in proportion), a shadow deficit under kIgnoredShadowDeficit is
+  // dropped (so ground far from the occluders renders byte for byte as in
+  // render()), and the occluders' irradiance is interpolated from a 64x32
+  // table of normals. truth.tag_fully_visible / probe_fully_visible also turn
+  // false when an occluder hides part of the tag / of the ball's outline.
+  void renderWithOccluders(std::uint64_t frame_index, const std::vector<VirtualOccluder>& occluders,
+                           ImageRGB8& out, FrameTruth& truth) const;
+  // Below this (every channel) renderWithOccluders leaves the ground unshadowed:
+  // it changes an 8-bit sRGB code by at most 0.44 * 255 * deficit = 0.02.
+  static constexpr double kIgnoredShadowDeficit = 2e-4;
 
  private:
   struct Impl;

@@ -55,6 +55,15 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_DOUBLE_EQ(from_file.map_updates.change_threshold_code, defaults.map_updates.change_threshold_code);
   EXPECT_EQ(from_file.map_updates.max_age_frames, defaults.map_updates.max_age_frames);
   EXPECT_DOUBLE_EQ(from_file.map_updates.smoothing_new_weight, defaults.map_updates.smoothing_new_weight);
+  EXPECT_EQ(from_file.lights.dome.light_count, defaults.lights.dome.light_count);
+  EXPECT_EQ(from_file.lights.dome.placement, defaults.lights.dome.placement);
+  EXPECT_DOUBLE_EQ(from_file.lights.fade_s, defaults.lights.fade_s);
+  EXPECT_EQ(from_file.lights.shadows, defaults.lights.shadows);
+  EXPECT_EQ(from_file.lights.shadow_map_size_px, defaults.lights.shadow_map_size_px);
+  EXPECT_EQ(from_file.lights.ground_texture_size_px, defaults.lights.ground_texture_size_px);
+  EXPECT_DOUBLE_EQ(from_file.lights.max_shadow_reach_m, defaults.lights.max_shadow_reach_m);
+  EXPECT_EQ(from_file.lights.refit_when_light_changes, defaults.lights.refit_when_light_changes);
+  EXPECT_DOUBLE_EQ(from_file.lights.refit_change_fraction, defaults.lights.refit_change_fraction);
   EXPECT_EQ(from_file.probe_refinement.enabled, defaults.probe_refinement.enabled);
   EXPECT_DOUBLE_EQ(from_file.probe_refinement.weight, defaults.probe_refinement.weight);
   EXPECT_EQ(from_file.sim.ball_offset_m, defaults.sim.ball_offset_m);

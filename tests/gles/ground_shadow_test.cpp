@@ -16,6 +16,8 @@
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/ground_shadow.hpp"
 #include "pipeline/object_compositor.hpp"
+#include "ibl/camera_projection.hpp"
+#include "ibl/color_transfer.hpp"
 
 namespace probelight {
 namespace {
@@ -194,6 +196,57 @@ TEST_F(GpuTest, LightsInSeveralBatchesGiveTheSameFraction) {
   // Each batch's output is rounded to 8 bits before the next is subtracted:
   // one code per extra batch (8 -> 2 batches of 8, 3 -> 6 batches: up to 5).
   EXPECT_LE(worst, 6.0 / 255.0);
+}
+
+// The composite: a uniform floor of sRGB code 180 under an overhead light
+// that carries half the ground's light, with a sphere: under it the floor
+// must read encode(0.5 decode(180)), away from it 180, and pixels the ground
+// square does not cover are untouched.
+TEST_F(GpuTest, CompositeDarkensTheCameraPixelsByTheFractionInLinearLight) {
+  std::string error;
+  const CameraIntrinsics camera = test::testCamera();
+  const PoseCamFromWorld pose = test::lookAt({0.0, -0.35, 0.45}, {0.0, 0.0, 0.0});
+  ImageRGB8 frame;
+  frame.resize(camera.width_px, camera.height_px);
+  std::fill(frame.pixels.begin(), frame.pixels.end(), std::uint8_t{180});
+  pipeline::CameraFrameTexture texture;
+  ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
+  ASSERT_TRUE(texture.upload(frame, error)) << error;
+  pipeline::ObjectCompositor compositor;
+  ASSERT_TRUE(compositor.init(test::sharedCapabilities(), {}, pipeline::CubeStorage::kSrgb8, error)) << error;
+  pipeline::GroundShadow shadow;
+  ASSERT_TRUE(shadow.init(test::sharedCapabilities(), {}, error)) << error;
+  ibl::ShadowLight overhead;
+  overhead.direction_w = {0, 0, 1};
+  overhead.share_rgb = glm::dvec3(0.5);
+  ibl::ShadowCaster sphere;
+  sphere.radius_m = 0.04;
+  ASSERT_TRUE(shadow.update({overhead}, sphere, error)) << error;
+  gles::RenderTarget target;
+  ASSERT_TRUE(target.init(camera.width_px, camera.height_px, error)) << error;
+  target.bind();
+  compositor.drawCameraBackground(texture);
+  ASSERT_TRUE(shadow.drawOnCameraImage(camera, pose, texture, error)) << error;
+  ImageRGB8 out;
+  ASSERT_TRUE(target.readRGB(out, error)) << error;
+  const double expected_code = 255.0 * ibl::linearToSrgb(0.5 * ibl::srgbToLinear(180.0 / 255.0));
+  // Where the centre of the disc under the sphere, and a point of the
+  // square well outside the disc (0.8 r from a corner), land in the image.
+  auto pixelOf = [&](const glm::dvec3& p_w) {
+    const glm::dvec2 px = ibl::projectToPixel(camera, pose.toCamera(p_w));
+    return glm::ivec2(static_cast<int>(std::lround(px.x)), static_cast<int>(std::lround(px.y)));
+  };
+  const glm::ivec2 under = pixelOf({0.0, 0.0, 0.0});
+  const double half = shadow.region().half_size_m;
+  const glm::ivec2 lit = pixelOf({0.9 * half, 0.9 * half, 0.0});
+  const glm::ivec2 outside = pixelOf({3.0 * half, 0.0, 0.0});
+  auto code = [&](const glm::ivec2& p) { return static_cast<double>(out.pixels[(static_cast<std::size_t>(p.y) * out.width + p.x) * 3 + 1]); };
+  std::printf("[ composite] floor 180: under the sphere %.0f (expected %.1f), lit ground %.0f, outside %.0f\n", code(under),
+              expected_code, code(lit), code(outside));
+  // One code for the 8-bit fraction and one for the re-encoding.
+  EXPECT_NEAR(code(under), expected_code, 2.0);
+  EXPECT_NEAR(code(lit), 180.0, 1.0);
+  EXPECT_EQ(code(outside), 180.0);
 }
 
 TEST_F(GpuTest, NoLightsMeansNoShadowAndNothingDrawn) {
