@@ -26,10 +26,15 @@
 #include "gles/egl_context.hpp"
 #include "ibl/camera_projection.hpp"
 #include "ibl/color_transfer.hpp"
+#include "gles/render_target.hpp"
+#include "ibl/ground_shadow.hpp"
+#include "ibl/light_dome.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
+#include "pipeline/ground_shadow.hpp"
+#include "pipeline/object_compositor.hpp"
 #include "tracking/probe_edge_fit.hpp"
 #include "tracking/tag_tracker.hpp"
 
@@ -164,7 +169,8 @@ struct Analysis {
 // it found, so that a failure part-way still reports everything before it.
 class Analyzer {
  public:
-  Analyzer(const AnalyzeOptions& options, std::ostream& log) : options_(options), log_(log) {}
+  Analyzer(const AnalyzeOptions& options, std::ostream& log, const RenderOptions* render = nullptr)
+      : options_(options), log_(log), render_(render) {}
 
   int run() {
     if (const int status = loadInputs(); status != 0) return status;
@@ -172,6 +178,8 @@ class Analyzer {
     detectTag();
     if (track_.found) measureProbe();
     if (probe_usable_) makeMaps();
+    if (reflection_) fitLights();
+    if (render_ && reflection_ && result_.status == 0) renderComposite();
     writePictures();
     return finish();
   }
@@ -387,6 +395,91 @@ class Analyzer {
     result_.json["irradiance"] = entries;
   }
 
+  // The dome of lights and the dominant light, as `run` fits them at a
+  // recalibration, from the reflection map (settings: the `lights` section).
+  void fitLights() {
+    dome_ = ibl::fitLightDome(*reflection_, &reflection_validity_, settings_.lights.dome);
+    const ibl::DominantLight dominant = ibl::findDominantLight(
+        *reflection_, &reflection_validity_, dome_, 1.0 / rig_.probe_reflectance, settings_.lights.dome);
+    Json lights = Json::array();
+    for (const ibl::DomeLight& light : dome_)
+      lights.push_back({{"direction", vec3Json(light.direction_w)},
+                        {"rgb", vec3Json(light.rgb)},
+                        {"spread_deg", glm::degrees(light.spread_rad)}});
+    result_.json["lights"] = lights;
+    result_.json["light_placement"] = ibl::toString(settings_.lights.dome.placement);
+    result_.json["dominant_light"] = {{"direction", vec3Json(dominant.direction_w)},
+                                      {"rgb", vec3Json(dominant.rgb)},
+                                      {"from_clipped_region", dominant.from_clipped_region}};
+  }
+
+  // render: the object, lit by the maps (Lambertian), and its shadow on the
+  // real ground, over the frame: the stages `run` draws with.
+  void renderComposite() {
+    std::string error;
+    gles::Capabilities capabilities = gles::probeCapabilities();
+    if (settings_.maps.force_8bit) capabilities = capabilities.withoutExtensions();
+    ibl::ShadowCaster caster;
+    caster.position_w = render_->at_w;
+    if (render_->object == "box") {
+      caster.shape = ibl::ShadowCaster::Shape::kBox;
+      caster.box_size_m = render_->box_size_m;
+      caster.box_yaw_rad = glm::radians(render_->yaw_deg);
+    } else {
+      caster.radius_m = render_->radius_m;
+    }
+    const std::vector<ibl::ShadowLight> lights = ibl::groundShadowLights(dome_);
+    pipeline::GroundShadow shadow;
+    pipeline::ObjectCompositor compositor;
+    gles::RenderTarget target;
+    const auto start = Clock::now();
+    if (!shadow.init(capabilities, groundShadowSettings(settings_), error) ||
+        (settings_.lights.shadows && !shadow.update(lights, caster, error)) ||
+        !compositor.init(capabilities, pipeline::ObjectCompositorSettings{}, maps_->storage(), error) ||
+        !target.init(camera_.width_px, camera_.height_px, error)) {
+      result_.fail(1, "GPU: " + error);
+      return;
+    }
+    target.bind();
+    compositor.drawCameraBackground(*frame_texture_);
+    ibl::SurfaceMaterial lambertian;
+    lambertian.albedo = glm::vec3(render_->albedo);
+    lambertian.k_diffuse = 1.0f;
+    bool drawn = shadow.drawOnCameraImage(camera_, track_.pose, *frame_texture_, error);
+    if (drawn && caster.shape == ibl::ShadowCaster::Shape::kSphere)
+      drawn = compositor.drawSphereObject(camera_, track_.pose, caster.boundingCentre(), caster.radius_m, lambertian,
+                                          ibl::SceneLighting{}, *maps_, error);
+    else if (drawn)
+      drawn = compositor.drawMeshObject(camera_, track_.pose, pipeline::boxMesh(caster), lambertian,
+                                        ibl::SceneLighting{}, *maps_, error);
+    ImageRGB8 composite;
+    if (!drawn || !target.readRGB(composite, error)) {
+      result_.fail(1, "GPU: " + error);
+      return;
+    }
+    timings_[1]["render"] = timings_[0]["render"] = msSince(start);
+    double darkest = 1.0;
+    if (shadow.hasShadow())
+      if (const auto fraction = shadow.readFraction(error))
+        for (const glm::vec3& f : *fraction) darkest = std::min(darkest, static_cast<double>(std::min({f.r, f.g, f.b})));
+    Json object = {{"shape", render_->object}, {"at_w", vec2Json(render_->at_w)}, {"albedo", vec3Json(render_->albedo)}};
+    if (caster.shape == ibl::ShadowCaster::Shape::kSphere) object["radius_m"] = caster.radius_m;
+    else {
+      object["size_m"] = vec3Json(caster.box_size_m);
+      object["yaw_deg"] = render_->yaw_deg;
+    }
+    result_.json["render"] = {{"object", object},
+                              {"shadow",
+                               {{"lights_casting", lights.size()},
+                                {"depth_storage", shadow.depthStorageDescription()},
+                                {"region_centre_w", vec2Json(shadow.region().centre_w)},
+                                {"region_half_size_m", shadow.region().half_size_m},
+                                {"darkest_fraction", darkest}}}};
+    cv::Mat rgb(composite.height, composite.width, CV_8UC3, composite.pixels.data()), bgr;
+    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+    if (save("composite.png", bgr)) result_.json["render"]["composite"] = "composite.png";
+  }
+
   void writePictures() {
     Json pictures = Json::object();
     writeOverlay(pictures);
@@ -478,13 +571,14 @@ class Analyzer {
   int finish() {
     for (int run = 0; run < 2; ++run) {
       Json timings = Json::object();
-      for (const char* stage : {"detect_pose", "upload", "probe_to_cube", "diffuse_blur"})
+      for (const char* stage : {"detect_pose", "upload", "probe_to_cube", "diffuse_blur", "render"})
         if (timings_[run].count(stage)) timings[stage] = timings_[run][stage];
       result_.json[run == 0 ? "timings_first_ms" : "timings_ms"] = timings;
     }
     // The keys first, then the rest, so the file reads top-down.
     Json ordered = Json::object();
-    for (const char* key : {"error", "tag", "pose", "probe", "irradiance", "timings_ms", "timings_first_ms"})
+    for (const char* key :
+         {"error", "tag", "pose", "probe", "irradiance", "lights", "dominant_light", "render", "timings_ms", "timings_first_ms"})
       if (result_.json.contains(key)) ordered[key] = result_.json[key];
     for (const auto& [key, value] : result_.json.items())
       if (!ordered.contains(key)) ordered[key] = value;
@@ -501,12 +595,14 @@ class Analyzer {
     return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   }
   int say(int status, const std::string& message) {
-    log_ << "probelight: analyze: " << message << "\n";
+    log_ << "probelight: " << (render_ ? "render" : "analyze") << ": " << message << "\n";
     return status;
   }
 
   const AnalyzeOptions& options_;
   std::ostream& log_;
+  const RenderOptions* render_;  // null for analyze
+  std::vector<ibl::DomeLight> dome_;
   AppSettings settings_;
   CameraIntrinsics camera_;
   RigGeometry rig_;
@@ -660,5 +756,7 @@ cv::Mat renderCubeCross(const ibl::CubeMapRGB& map, const CrossPictureOptions& o
 }
 
 int runAnalyze(const AnalyzeOptions& options, std::ostream& log) { return Analyzer(options, log).run(); }
+
+int runRender(const RenderOptions& options, std::ostream& log) { return Analyzer(options.frame, log, &options).run(); }
 
 }  // namespace probelight

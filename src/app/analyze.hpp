@@ -62,4 +62,9 @@ double crossDisplayScale(const ibl::CubeMapRGB& map, const std::vector<float>& v
 
 int runAnalyze(const AnalyzeOptions& options, std::ostream& log);
 
+// `probelight render`: analyze, then the object composited into the frame
+// with its shadow on the ground (DIR/composite.png, the frame's size); the
+// same exit statuses.
+int runRender(const RenderOptions& options, std::ostream& log);
+
 }  // namespace probelight

@@ -113,6 +113,80 @@ AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
 
 namespace {
 
+// Comma-separated finite numbers, exactly `count` of them (or 1 when
+// `one_for_all`: the same value for every component).
+std::vector<double> parseNumberList(const std::string& flag, const std::string& text, std::size_t count,
+                                    bool one_for_all, const std::string& what) {
+  std::vector<double> values;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = text.find(',', start);
+    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    double value = 0.0;
+    auto [ptr, ec] = std::from_chars(part.data(), part.data() + part.size(), value);
+    if (part.empty() || ec != std::errc() || ptr != part.data() + part.size() || !std::isfinite(value))
+      throw UsageError("flag " + flag + ": expected " + what + ", got '" + text + "'");
+    values.push_back(value);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (one_for_all && values.size() == 1) values.assign(count, values[0]);
+  if (values.size() != count) throw UsageError("flag " + flag + ": expected " + what + ", got '" + text + "'");
+  return values;
+}
+
+}  // namespace
+
+RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
+  RenderOptions options;
+  auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
+  bool have_size = false;
+  parseFlags(args,
+             {{"--frame", into(options.frame.frame_path)},
+              {"--camera", into(options.frame.camera_path)},
+              {"--rig", into(options.frame.rig_path)},
+              {"--out", into(options.frame.out_dir)},
+              {"--config", into(options.frame.config_path)},
+              {"--object", [&](auto& f, auto& v) { requireChoice(f, v, {"sphere", "box"}); options.object = v; }},
+              {"--radius",
+               [&](auto& f, auto& v) {
+                 options.radius_m = parseNumberList(f, v, 1, false, "a radius in metres, e.g. 0.03")[0];
+                 if (!(options.radius_m > 0.0)) throw UsageError("flag " + f + ": the radius must be > 0, got '" + v + "'");
+               }},
+              {"--size",
+               [&](auto& f, auto& v) {
+                 const auto s = parseNumberList(f, v, 3, false, "the box's edges X,Y,Z in metres, e.g. 0.05,0.04,0.06");
+                 if (!(s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0))
+                   throw UsageError("flag " + f + ": every edge must be > 0, got '" + v + "'");
+                 options.box_size_m = {s[0], s[1], s[2]};
+                 have_size = true;
+               }},
+              {"--yaw", [&](auto& f, auto& v) { options.yaw_deg = parseNumberList(f, v, 1, false, "degrees")[0]; }},
+              {"--at",
+               [&](auto& f, auto& v) {
+                 const auto p = parseNumberList(f, v, 2, false, "X,Y in metres on the ground of the tag's frame");
+                 options.at_w = {p[0], p[1]};
+               }},
+              {"--albedo",
+               [&](auto& f, auto& v) {
+                 const auto a = parseNumberList(f, v, 3, true, "A or R,G,B in [0, 1]");
+                 for (double c : a)
+                   if (c < 0.0 || c > 1.0) throw UsageError("flag " + f + ": albedo must be in [0, 1], got '" + v + "'");
+                 options.albedo = {a[0], a[1], a[2]};
+               }}},
+             {}, "render");
+  if (options.frame.frame_path.empty()) throw UsageError("render needs --frame FILE (the camera frame)");
+  if (options.frame.camera_path.empty()) throw UsageError("render needs --camera camera.yaml (the calibration of the camera that took it)");
+  if (options.frame.rig_path.empty()) throw UsageError("render needs --rig rig.yaml");
+  if (options.frame.out_dir.empty()) throw UsageError("render needs --out DIR (where composite.png and analysis.json go)");
+  if (options.object == "sphere" && options.radius_m == 0.0) throw UsageError("render needs --radius METRES for a sphere");
+  if (options.object == "box" && !have_size) throw UsageError("render needs --size X,Y,Z (metres) for a box");
+  if (options.object == "sphere" && have_size) throw UsageError("flag --size: only for --object box");
+  return options;
+}
+
+namespace {
+
 // --board COLSxROWS, inner corners. OpenCV's detector needs at least 3 each
 // way (it throws below that), so 1x1 or 2x5 is refused here with the flag's name.
 void parseBoard(const std::string& flag, const std::string& text, int& cols, int& rows) {
@@ -166,6 +240,11 @@ usage:
   probelight analyze --frame F --camera camera.yaml --rig rig.yaml --out DIR [--config probelight.yaml]
                                one frame in: DIR/analysis.json (tag, pose, ball, irradiance, timings)
                                and pictures (overlay.png, ball.png, reflection_cross.png, diffuse_cross.png)
+  probelight render --frame F --camera camera.yaml --rig rig.yaml --out DIR --object sphere --radius R
+                    [--at X,Y] [--albedo A|R,G,B] [--config probelight.yaml]
+  probelight render ... --object box --size X,Y,Z [--yaw DEG]
+                               a virtual object put into one frame, lit by what its ball shows and
+                               casting its shadow on the real ground: DIR/composite.png and analysis.json
   probelight calibrate-camera --images GLOB --board COLSxROWS --square METRES --out camera.yaml
                                chessboard views in, camera.yaml out; prints the RMS and per-view
                                reprojection errors and why each rejected view was rejected
@@ -195,7 +274,7 @@ calibrate-camera flags:
 
 exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration
              (calibrate-camera: also no matching files or too few usable views),
-             3 (analyze) the tag or the ball was not found: analysis.json says why.
+             3 (analyze, render) the tag or the ball was not found: analysis.json says why.
 )";
 }
 

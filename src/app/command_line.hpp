@@ -6,6 +6,8 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+
+#include <glm/glm.hpp>
 #include <vector>
 
 namespace probelight {
@@ -47,6 +49,19 @@ struct AnalyzeOptions {
 
 // Parses the flags after `probelight analyze`. Throws UsageError.
 AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args);
+
+// `probelight render`: analyze's flags, plus the virtual object to put into
+// the frame, standing on the ground of W.
+struct RenderOptions {
+  AnalyzeOptions frame;        // --frame, --camera, --rig, --out, --config
+  std::string object = "sphere";  // sphere | box
+  double radius_m = 0.0;       // sphere: required
+  glm::dvec3 box_size_m{0.0};  // box: --size X,Y,Z (required)
+  double yaw_deg = 0.0;        // box: turned about +Z
+  glm::dvec2 at_w{0.0};        // --at X,Y: where it stands
+  glm::dvec3 albedo{0.8};      // --albedo A or R,G,B in [0, 1]
+};
+RenderOptions parseRenderOptions(const std::vector<std::string>& args);
 
 // Flags of `probelight calibrate-camera`: chessboard views in, camera.yaml
 // out. All are required: a wrong board size finds no corners, and a default

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   try {
     if (command == "run") return runKiosk(parseRunOptions(args), std::cerr);
     if (command == "analyze") return runAnalyze(parseAnalyzeOptions(args), std::cerr);
+    if (command == "render") return runRender(parseRenderOptions(args), std::cerr);
     if (command == "calibrate-camera") return runCalibrateCamera(parseCalibrateCameraOptions(args), std::cout, std::cerr);
     throw UsageError("unknown command '" + command + "' (see probelight --help)");
   } catch (const UsageError& error) {

@@ -29,6 +29,9 @@ bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const Ob
                                                     cubeStorageDefines(storage), error);
   if (!sphere_program) return false;
   sphere_program_ = std::move(*sphere_program);
+  auto mesh_program = gles::Program::fromEmbedded("mesh_object.vert", "sphere_object.frag", cubeStorageDefines(storage), error);
+  if (!mesh_program) return false;
+  mesh_program_ = std::move(*mesh_program);
 
   // Unit sphere, latitude rings from the south pole to the north pole.
   const int columns = settings.sphere_longitude_segments;
@@ -86,10 +89,10 @@ void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_fra
   quad_.draw(image_program_.attribute("a_position"));
 }
 
-bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
-                                        glm::dvec3 centre_w, double radius_m, const ibl::SurfaceMaterial& material,
-                                        const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
-                                        std::string& error) {
+bool ObjectCompositor::prepareShading(const gles::Program& program, const CameraIntrinsics& camera,
+                                      const PoseCamFromWorld& pose, const ibl::SurfaceMaterial& material,
+                                      const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
+                                      std::string& error) {
   if (environment.storage() != storage_) {
     error = "ObjectCompositor: initialised for a different cube map storage than these EnvironmentMaps use";
     return false;
@@ -98,11 +101,7 @@ bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const Po
   const GpuCubeMap& reflection = environment.reflection();
   const glm::vec3 eye_w(pose.cameraCenterWorld());
   const glm::mat3 rotation(pose.R_cam_from_world);
-  const gles::Program& program = sphere_program_;
   program.use();
-  glUniform3f(program.uniform("u_center_w"), static_cast<float>(centre_w.x), static_cast<float>(centre_w.y),
-              static_cast<float>(centre_w.z));
-  glUniform1f(program.uniform("u_radius_m"), static_cast<float>(radius_m));
   glUniformMatrix3fv(program.uniform("u_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
   const glm::vec3 translation(pose.t_cam_from_world);
   glUniform3fv(program.uniform("u_translation_cam_from_world"), 1, glm::value_ptr(translation));
@@ -161,8 +160,20 @@ bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const Po
   glDepthMask(GL_TRUE);
   glDisable(GL_BLEND);
   // The image's y-down flip mirrors winding, so back-face culling is left off:
-  // a closed sphere is depth-tested correctly either way.
+  // a closed object is depth-tested correctly either way.
   glDisable(GL_CULL_FACE);
+  return true;
+}
+
+bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
+                                        glm::dvec3 centre_w, double radius_m, const ibl::SurfaceMaterial& material,
+                                        const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
+                                        std::string& error) {
+  const gles::Program& program = sphere_program_;
+  if (!prepareShading(program, camera, pose, material, lighting, environment, error)) return false;
+  glUniform3f(program.uniform("u_center_w"), static_cast<float>(centre_w.x), static_cast<float>(centre_w.y),
+              static_cast<float>(centre_w.z));
+  glUniform1f(program.uniform("u_radius_m"), static_cast<float>(radius_m));
   const GLint unit = program.attribute("a_unit");
   if (unit < 0) {
     error = "ObjectCompositor: sphere_object.vert has no attribute a_unit";
@@ -178,6 +189,35 @@ bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const Po
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glDisable(GL_DEPTH_TEST);
   return gles::checkGl("ObjectCompositor::drawSphereObject", error);
+}
+
+bool ObjectCompositor::drawMeshObject(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
+                                      const std::vector<MeshVertex>& triangles, const ibl::SurfaceMaterial& material,
+                                      const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
+                                      std::string& error) {
+  if (triangles.empty()) return true;
+  const gles::Program& program = mesh_program_;
+  if (!prepareShading(program, camera, pose, material, lighting, environment, error)) return false;
+  if (!mesh_vertices_.valid()) mesh_vertices_ = gles::Buffer::create();
+  glBindBuffer(GL_ARRAY_BUFFER, mesh_vertices_.id());
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(triangles.size() * sizeof(MeshVertex)), triangles.data(),
+               GL_DYNAMIC_DRAW);
+  const GLint position = program.attribute("a_position_w"), normal = program.attribute("a_normal_w");
+  if (position < 0 || normal < 0) {
+    error = "ObjectCompositor: mesh_object.vert lacks a_position_w or a_normal_w";
+    return false;
+  }
+  glEnableVertexAttribArray(static_cast<GLuint>(position));
+  glVertexAttribPointer(static_cast<GLuint>(position), 3, GL_FLOAT, GL_FALSE, sizeof(MeshVertex), nullptr);
+  glEnableVertexAttribArray(static_cast<GLuint>(normal));
+  glVertexAttribPointer(static_cast<GLuint>(normal), 3, GL_FLOAT, GL_FALSE, sizeof(MeshVertex),
+                        reinterpret_cast<const void*>(sizeof(glm::vec3)));
+  glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(triangles.size()));
+  glDisableVertexAttribArray(static_cast<GLuint>(position));
+  glDisableVertexAttribArray(static_cast<GLuint>(normal));
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  glDisable(GL_DEPTH_TEST);
+  return gles::checkGl("ObjectCompositor::drawMeshObject", error);
 }
 
 bool ObjectCompositor::drawOverlayRGBA(const std::uint8_t* rgba, int width, int height, std::string& error) {
@@ -206,6 +246,29 @@ bool ObjectCompositor::drawOverlayRGBA(const std::uint8_t* rgba, int width, int 
   quad_.draw(image_program_.attribute("a_position"));
   glDisable(GL_BLEND);
   return gles::checkGl("ObjectCompositor::drawOverlayRGBA", error);
+}
+
+std::vector<ObjectCompositor::MeshVertex> boxMesh(const ibl::ShadowCaster& box) {
+  const double c = std::cos(box.box_yaw_rad), s = std::sin(box.box_yaw_rad);
+  const glm::dvec3 centre = box.boundingCentre();
+  auto toWorld = [&](const glm::dvec3& local) { return glm::dvec3(c * local.x - s * local.y, s * local.x + c * local.y, local.z); };
+  std::vector<ObjectCompositor::MeshVertex> triangles;
+  // Each face: its outward axis n and two in-face axes a, b with a x b = n.
+  const glm::dvec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int axis = 0; axis < 3; ++axis)
+    for (double sign : {1.0, -1.0}) {
+      const glm::dvec3 n = sign * axes[axis];
+      const glm::dvec3 a = axes[(axis + 1) % 3], b = glm::cross(n, a);
+      const glm::dvec3 half = 0.5 * box.box_size_m;
+      auto corner = [&](double u, double v) {
+        const glm::dvec3 local = n * half + u * a * half + v * b * half;
+        return glm::vec3(centre + toWorld(local));
+      };
+      const glm::vec3 normal(toWorld(n));
+      const glm::vec3 p00 = corner(-1, -1), p10 = corner(1, -1), p11 = corner(1, 1), p01 = corner(-1, 1);
+      for (const glm::vec3& p : {p00, p10, p11, p00, p11, p01}) triangles.push_back({p, normal});
+    }
+  return triangles;
 }
 
 }  // namespace probelight::pipeline

@@ -8,12 +8,14 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <glm/glm.hpp>
 
 #include "core/types.hpp"
 #include "gles/capabilities.hpp"
 #include "gles/gl_objects.hpp"
+#include "ibl/ground_shadow.hpp"
 #include "ibl/surface_shading.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
@@ -49,14 +51,31 @@ class ObjectCompositor {
                         double radius_m, const ibl::SurfaceMaterial& material, const ibl::SceneLighting& lighting,
                         EnvironmentMaps& environment, std::string& error);
 
+  // Triangles (3 vertices each) with their normals, in W, shaded as the
+  // sphere is: for objects other than spheres (a box, later meshes).
+  struct MeshVertex {
+    glm::vec3 position_w;
+    glm::vec3 normal_w;
+  };
+  bool drawMeshObject(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
+                      const std::vector<MeshVertex>& triangles, const ibl::SurfaceMaterial& material,
+                      const ibl::SceneLighting& lighting, EnvironmentMaps& environment, std::string& error);
+
   // Blends straight-alpha RGBA (top row first, sRGB bytes) over the whole viewport.
   bool drawOverlayRGBA(const std::uint8_t* rgba, int width, int height, std::string& error);
 
  private:
+  // Uniforms, textures and state shared by the object programs.
+  bool prepareShading(const gles::Program& program, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
+                      const ibl::SurfaceMaterial& material, const ibl::SceneLighting& lighting,
+                      EnvironmentMaps& environment, std::string& error);
+
   ObjectCompositorSettings settings_;
   CubeStorage storage_ = CubeStorage::kSrgb8;
   gles::Program image_program_;
   gles::Program sphere_program_;
+  gles::Program mesh_program_;
+  gles::Buffer mesh_vertices_;
   gles::FullScreenQuad quad_;
   gles::Buffer sphere_vertices_;
   gles::Buffer sphere_indices_;
@@ -65,5 +84,9 @@ class ObjectCompositor {
   int overlay_width_ = 0;
   int overlay_height_ = 0;
 };
+
+// A box standing on the ground (ibl::ShadowCaster of Shape::kBox) as 12
+// flat-shaded triangles with outward normals.
+std::vector<ObjectCompositor::MeshVertex> boxMesh(const ibl::ShadowCaster& box);
 
 }  // namespace probelight::pipeline
