@@ -37,11 +37,15 @@
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
 #include "ibl/probe_to_cube.hpp"
+#include "ibl/ground_shadow.hpp"
+#include "ibl/light_dome.hpp"
 #include "ibl/spherical_blur.hpp"
 #include "ibl/surface_shading.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
+#include "pipeline/ground_shadow.hpp"
 #include "pipeline/object_compositor.hpp"
+#include "sim/occluder.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
 #include "tracking/tag_tracker.hpp"
@@ -516,6 +520,143 @@ void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int hal
 }
 
 // ---------------------------------------------------------------------------
+// 3b. lights and shadows: the dome fit (CPU, at a recalibration) and the
+// shadow maps + ground fraction (GPU, when the lights or the object change),
+// with the ground fraction's error against the simulator's brute-force truth
+// of the clipped environment (World::groundShadow), for a 35 mm sphere
+// beside the tag.
+
+struct ShadowRig {
+  FrameTextures frames;
+  pipeline::EnvironmentMaps maps;
+  std::optional<ibl::CubeMapRGB> reflection;
+  std::vector<float> validity;
+  bool init(std::string& error) {
+    Setup& s = setup();
+    if (!frames.init(s.capabilities_full, error) ||
+        !maps.init(s.capabilities_full, pipeline::EnvironmentMapSettings{}, error) ||
+        !maps.updateReflection(*frames.textures[0], s.frames[0].view, s.scene.rig.probe_reflectance, error))
+      return false;
+    reflection = maps.readReflection(error, &validity);
+    return reflection.has_value();
+  }
+};
+
+ibl::ShadowCaster benchCaster() {
+  ibl::ShadowCaster caster;
+  caster.position_w = {-0.10, 0.06};
+  caster.radius_m = 0.035;
+  return caster;
+}
+
+void fitLights(benchmark::State& state, ibl::DomePlacement placement, int count) {
+  if (!requireGl(state)) return;
+  ShadowRig rig;
+  std::string error;
+  if (!rig.init(error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  ibl::LightDomeSettings settings;
+  settings.placement = placement;
+  settings.light_count = count;
+  for (auto _ : state) {
+    std::vector<ibl::DomeLight> dome = ibl::fitLightDome(*rig.reflection, &rig.validity, settings);
+    benchmark::DoNotOptimize(dome);
+  }
+}
+
+void shadows(benchmark::State& state, ibl::DomePlacement placement, int count) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  ShadowRig rig;
+  pipeline::GroundShadow shadow;
+  std::string error;
+  if (!rig.init(error) || !shadow.init(s.capabilities_full, {}, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  ibl::LightDomeSettings settings;
+  settings.placement = placement;
+  settings.light_count = count;
+  const std::vector<ibl::ShadowLight> lights =
+      ibl::groundShadowLights(ibl::fitLightDome(*rig.reflection, &rig.validity, settings));
+  const ibl::ShadowCaster caster = benchCaster();
+  const std::string name = std::string("shadows/") + ibl::toString(placement) + "/lights:" + std::to_string(count);
+  bool failed = false;
+  const ErrorRow& row = errorsFor(name, [&] {
+    ErrorRow r;
+    std::optional<std::vector<glm::vec3>> fraction;
+    if (!shadow.update(lights, caster, error) || !(fraction = shadow.readFraction(error))) {
+      failed = true;
+      return r;
+    }
+    // The ground around the sphere: 24 x 24 points over +-4 radii, outside it.
+    std::vector<glm::dvec2> points;
+    for (int j = 0; j < 24; ++j)
+      for (int i = 0; i < 24; ++i) {
+        const glm::dvec2 p = caster.position_w + 4.0 * caster.radius_m * glm::dvec2((2 * i + 1) / 24.0 - 1.0, (2 * j + 1) / 24.0 - 1.0);
+        if (glm::length(p - caster.position_w) > caster.radius_m * 0.3) points.push_back(p);
+      }
+    sim::VirtualOccluder occluder;
+    occluder.position_w = caster.position_w;
+    occluder.radius_m = caster.radius_m;
+    const std::vector<sim::World::GroundShadowTruth> truth = s.world->groundShadow(points, {occluder}, 0);
+    const ibl::GroundRegion& region = shadow.region();
+    const int n = shadow.groundTextureSizePx();
+    double mae = 0.0;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const glm::dvec2 uv = (points[k] - region.centre_w) / (2.0 * region.half_size_m) + 0.5;
+      double ours = 1.0;
+      if (uv.x >= 0.0 && uv.y >= 0.0 && uv.x < 1.0 && uv.y < 1.0) {
+        const int i = static_cast<int>(uv.x * n), j = static_cast<int>(uv.y * n);
+        ours = luminance(glm::dvec3((*fraction)[static_cast<std::size_t>(j) * n + i]));
+      }
+      mae += std::abs(ours - luminance(truth[k].clipped)) / points.size();
+    }
+    r.values = {{"mae_vs_clipped", mae}, {"lights_casting", static_cast<double>(lights.size())}};
+    return r;
+  });
+  if (failed) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  for (auto _ : state) {
+    if (!shadow.update(lights, caster, error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    glFinish();
+  }
+  setCounters(state, row);
+}
+
+// The per-frame cost of the shadow once it is made: the ground square drawn
+// over the camera image.
+void shadowComposite(benchmark::State& state) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  ShadowRig rig;
+  pipeline::GroundShadow shadow;
+  gles::RenderTarget target;
+  std::string error;
+  if (!rig.init(error) || !shadow.init(s.capabilities_full, {}, error) ||
+      !shadow.update(ibl::groundShadowLights(ibl::fitLightDome(*rig.reflection, &rig.validity)), benchCaster(), error) ||
+      !target.init(s.scene.camera.width_px, s.scene.camera.height_px, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  target.bind();
+  for (auto _ : state) {
+    if (!shadow.drawOnCameraImage(s.scene.camera, s.frames[0].truth.pose, *rig.frames.textures[0], error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    glFinish();
+  }
+}
+
+// ---------------------------------------------------------------------------
 // 4. render + present readback, and the camera upload
 
 struct RenderRig {
@@ -715,6 +856,26 @@ void registerAll() {
         ->UseRealTime()
         ->MinTime(kMinTime);
 
+  for (ibl::DomePlacement placement :
+       {ibl::DomePlacement::kFixedRegions, ibl::DomePlacement::kMedianCut, ibl::DomePlacement::kClustered})
+    benchmark::RegisterBenchmark((std::string("fit_lights/") + ibl::toString(placement) + "/lights:8").c_str(),
+                                 [=](benchmark::State& state) { fitLights(state, placement, 8); })
+        ->Unit(kMillisecond)
+        ->UseRealTime()
+        ->MinTime(kMinTime);
+  for (int count : {4, 8, 16})
+    benchmark::RegisterBenchmark(("shadows/clustered/lights:" + std::to_string(count)).c_str(),
+                                 [=](benchmark::State& state) { shadows(state, ibl::DomePlacement::kClustered, count); })
+        ->Unit(kMillisecond)
+        ->UseRealTime()
+        ->MinTime(kMinTime);
+  for (ibl::DomePlacement placement : {ibl::DomePlacement::kFixedRegions, ibl::DomePlacement::kMedianCut})
+    benchmark::RegisterBenchmark((std::string("shadows/") + ibl::toString(placement) + "/lights:8").c_str(),
+                                 [=](benchmark::State& state) { shadows(state, placement, 8); })
+        ->Unit(kMillisecond)
+        ->UseRealTime()
+        ->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("shadow_composite/640x480", shadowComposite)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
   benchmark::RegisterBenchmark("render/640x480", renderFrame)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
   benchmark::RegisterBenchmark("present_readback/640x480", presentReadback)
       ->Unit(kMillisecond)
