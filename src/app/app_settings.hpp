@@ -55,10 +55,13 @@ struct LightsConfig {
   int shadow_map_size_px = 256;
   int ground_texture_size_px = 256;
   double max_shadow_reach_m = 0.5;  // from the object, for lights near the horizon
-  // Refit the lights when the ground's irradiance in the maps moves by more
-  // than refit_change_fraction since the last fit (a lamp switched on).
+  // Refit the lights when the ground's irradiance in the diffuse map moves by
+  // more than refit_change_fraction since the last fit (a lamp switched on).
+  // 10%: the map of a still scene moves by well under 1% from noise (the
+  // update policy's blend halves it again), and a light that changes the
+  // ground's light by less makes shadows that differ by less than that.
   bool refit_when_light_changes = false;
-  double refit_change_fraction = 0.25;
+  double refit_change_fraction = 0.1;
 };
 
 struct ObjectConfig {

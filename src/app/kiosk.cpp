@@ -564,7 +564,10 @@ class Kiosk {
       light = ibl::findDominantLight(*reflection, &validity, dome, 1.0 / inputs_.rig.probe_reflectance, config.dome);
     }
     light_transition_.retarget(dome, frame_time_s_);
-    lights_fitted_e_up_ = ibl::domeIrradiance(dome, {0.0, 0.0, 1.0});
+    // What checkLightChange compares with later: the same estimate, from the
+    // same map.
+    if (const std::optional<ibl::CubeMapRGB> diffuse = maps_.readDiffuse(error))
+      lights_fitted_e_up_ = glm::dvec3(diffuse->sampleBilinear({0.0, 0.0, 1.0})) * 3.14159265358979323846;
     lighting_.highlight_direction_w = glm::vec3(light.direction_w);
     lighting_.highlight_rgb = glm::vec3(light.rgb);
     report_.count("calibrations_completed");
@@ -587,15 +590,15 @@ class Kiosk {
     return 0;
   }
 
-  // lights.refit_when_light_changes: every 10th map update, the ground's
-  // irradiance in the diffuse map against the one the lights were fitted to;
-  // a large change (a lamp switched on or off) starts a recalibration.
+  // lights.refit_when_light_changes: at each map update (the policy already
+  // keeps those to when the ball's image changed, or every max_age_frames),
+  // the ground's irradiance in the diffuse map against the one the lights
+  // were fitted to; a large change (a lamp switched on or off) starts a
+  // recalibration. The read-back is 6 faces of 16^2.
   int checkLightChange(std::uint64_t frame_number) {
     const LightsConfig& config = inputs_.settings.lights;
-    if (!config.refit_when_light_changes || machine_.state() != AppState::kRunning || light_transition_.empty() ||
-        ++map_updates_since_light_check_ < 10)
+    if (!config.refit_when_light_changes || machine_.state() != AppState::kRunning || light_transition_.empty())
       return 0;
-    map_updates_since_light_check_ = 0;
     std::string error;
     const std::optional<ibl::CubeMapRGB> diffuse = maps_.readDiffuse(error);
     if (!diffuse) return fail(1, error);
@@ -642,6 +645,7 @@ class Kiosk {
     }
     report_.count("shadow_passes_run", ground_shadow_.shadowPassesLastUpdate());
     report_.count("shadow_updates");
+    last_shadow_update_frame_ = frames_done_ - 1;  // the frame being processed
     shadow_lights_ = lights;
     shadows_drawn_ = true;
     return 0;
@@ -692,6 +696,15 @@ class Kiosk {
     // Frames per tracking status, and the last frame the tag was not usable.
     report_.extra["tag_status"] = {{"frames", tag_status_frames_}, {"last_problem", last_tag_problem_}};
     report_.extra["probe_refinement"] = probeRefinementJson();
+    // Shadow maps are made only when the lights (fading after a fit) or the
+    // object change: passes run and skipped (a skipped pass is a light whose
+    // map from an earlier frame still holds), and the last frame that made any.
+    report_.extra["shadows"] = {{"enabled", inputs_.settings.lights.shadows},
+                                {"depth_storage", inputs_.settings.lights.shadows ? ground_shadow_.depthStorageDescription() : ""},
+                                {"passes_run", report_.counter("shadow_passes_run")},
+                                {"passes_skipped", report_.counter("shadow_passes_skipped")},
+                                {"updates", report_.counter("shadow_updates")},
+                                {"last_update_frame", last_shadow_update_frame_}};
     const nlohmann::json json = report_.toJson(static_cast<long long>(frames_done_), elapsed_s);
     const std::filesystem::path report_path = std::filesystem::path(options_.out_dir) / "report.json";
     std::ofstream out(report_path);
@@ -773,7 +786,7 @@ class Kiosk {
   glm::dvec3 lights_fitted_e_up_{0.0};  // the ground's irradiance when the lights were last fitted
   std::vector<ibl::ShadowLight> shadow_lights_;  // what the shadow maps show
   bool shadows_drawn_ = false;
-  int map_updates_since_light_check_ = 0;
+  std::uint64_t last_shadow_update_frame_ = 0;
   std::map<std::string, long long> tag_status_frames_;
   nlohmann::json last_tag_problem_;  // null until a frame's tag is not usable
   // probe_refinement's correction of rig.yaml's ball, and its record.

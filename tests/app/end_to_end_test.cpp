@@ -195,6 +195,55 @@ TEST_F(EndToEnd, ProbeRefinementCorrectsARigMeasuredWrong) {
   EXPECT_LT(report["accuracy"]["probe_center_error_px"].get<double>(), 0.5);  // the median
 }
 
+// A still camera in still light: after the start-up fit the lights fade in
+// over lights.fade_s (0.5 s, 15 frames) and the shadow maps follow them;
+// then nothing changes and no shadow map is rendered again.
+TEST_F(EndToEnd, StillSceneRendersNoShadowMapsOnceTheLightsHaveSettled) {
+  const fs::path out = dir_ / "out";
+  const CommandResult result = run("run --frames 60 --save-every 0 --path static --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  const nlohmann::json& shadows = report["shadows"];
+  ASSERT_TRUE(shadows["enabled"].get<bool>());
+  EXPECT_EQ(report["counters"]["calibrations_completed"], 1);
+  // The fit at frame 4 (5 good frames), then 15 frames of fading at 30 fps.
+  EXPECT_GE(shadows["updates"].get<int>(), 1);
+  EXPECT_LE(shadows["updates"].get<int>(), 16);
+  EXPECT_LE(shadows["last_update_frame"].get<int>(), 4 + 16);
+  // Every later frame skips all of its lights' passes.
+  EXPECT_GE(shadows["passes_skipped"].get<int>(), (60 - 21) * 1);
+  EXPECT_EQ(shadows["passes_run"].get<int>() % std::max(1, shadows["updates"].get<int>()), 0)
+      << "each update renders every casting light once";
+}
+
+// lights.refit_when_light_changes: a lamp switching on changes the ground's
+// light in the maps by far more than refit_change_fraction, and the kiosk
+// recalibrates on its own.
+TEST_F(EndToEnd, LampSwitchingOnRefitsTheLightsWhenAsked) {
+  const fs::path config = dir_ / "refit.yaml";
+  std::ofstream(config) << "lights:\n  refit_when_light_changes: true\nsim:\n  lamp_on_frame: 30\n";
+  const fs::path out = dir_ / "out";
+  const CommandResult result =
+      run("run --frames 150 --save-every 0 --path static --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  EXPECT_GE(report["counters"]["refits_for_light_change"].get<int>(), 1) << report["counters"].dump();
+  EXPECT_GE(report["counters"]["calibrations_completed"].get<int>(), 2);
+  EXPECT_GE(report["shadows"]["last_update_frame"].get<int>(), 30);
+
+  // And no refit when nothing changes (sensor noise moves the map by far
+  // less than 10%).
+  const fs::path calm_config = dir_ / "calm.yaml";
+  std::ofstream(calm_config) << "lights:\n  refit_when_light_changes: true\n";
+  const fs::path calm_out = dir_ / "calm";
+  const CommandResult calm = run("run --frames 90 --save-every 0 --path static --config " + calm_config.string() +
+                                 " --out " + calm_out.string());
+  ASSERT_EQ(calm.exit_status, 0) << calm.stderr_text;
+  const nlohmann::json calm_report = readReport(calm_out);
+  EXPECT_FALSE(calm_report["counters"].contains("refits_for_light_change")) << calm_report["counters"].dump();
+  EXPECT_EQ(calm_report["counters"]["calibrations_completed"], 1);
+}
+
 // diffuse_method: sh9 runs the whole kiosk through the SH9 stage, names it in
 // the report, and measures within the same bound as the cosine passes on a
 // smooth sky (SH9 is exact for bands 0-2, which hold an overcast sky).
