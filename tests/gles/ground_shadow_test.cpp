@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -247,6 +248,48 @@ TEST_F(GpuTest, CompositeDarkensTheCameraPixelsByTheFractionInLinearLight) {
   EXPECT_NEAR(code(under), expected_code, 2.0);
   EXPECT_NEAR(code(lit), 180.0, 1.0);
   EXPECT_EQ(code(outside), 180.0);
+}
+
+// Stress: all finite and sensible. A light a hair above the horizon (the
+// ground's depth slope in its map goes as 1 / z), a big object whose shadow
+// the region's cap cuts off, a tiny one, one far from the tag.
+TEST_F(GpuTest, ShadowStaysFiniteForGrazingLightsAndOddObjects) {
+  std::string error;
+  pipeline::GroundShadow shadow;
+  ASSERT_TRUE(shadow.init(test::sharedCapabilities(), {}, error)) << error;
+  ibl::ShadowLight grazing;
+  grazing.direction_w = glm::normalize(glm::dvec3(1.0, 0.2, 1e-5));
+  grazing.share_rgb = glm::dvec3(0.5);
+  grazing.cone_radius_rad = 0.05;
+  ibl::ShadowLight overhead;
+  overhead.direction_w = {0, 0, 1};
+  overhead.share_rgb = glm::dvec3(0.5);
+  ibl::ShadowCaster big, tiny, far_away;
+  big.radius_m = 0.4;
+  tiny.radius_m = 1e-4;
+  far_away.position_w = {25.0, -40.0};
+  // (A tiny object under a grazing light would get a square the cap makes
+  // 0.5 m wide: its 0.2 mm shadow falls between 4 mm texels. In practice a
+  // grazing light's share of the ground's light, rgb z / E, is nil and
+  // groundShadowLights drops it; so the tiny object gets the overhead light.)
+  for (const auto& [name, caster, lights] :
+       {std::tuple{"big", big, std::vector<ibl::ShadowLight>{grazing, overhead}},
+        std::tuple{"tiny", tiny, std::vector<ibl::ShadowLight>{overhead}},
+        std::tuple{"far away", far_away, std::vector<ibl::ShadowLight>{grazing, overhead}}}) {
+    ASSERT_TRUE(shadow.update(lights, caster, error)) << name << ": " << error;
+    EXPECT_LE(shadow.region().half_size_m, 0.5) << name << ": the cap holds";
+    const auto fraction = shadow.readFraction(error);
+    ASSERT_TRUE(fraction) << error;
+    float darkest = 1.0f;
+    for (const glm::vec3& f : *fraction) {
+      ASSERT_TRUE(std::isfinite(f.g)) << name;
+      darkest = std::min(darkest, f.g);
+    }
+    // The overhead light's disc is under every object (0.5 of the light);
+    // the grazing light's shadow may add to it: 0 to 0.5.
+    EXPECT_LE(darkest, 0.5f + 1.0f / 255.0f) << name;
+    EXPECT_GE(darkest, 0.0f) << name;
+  }
 }
 
 TEST_F(GpuTest, NoLightsMeansNoShadowAndNothingDrawn) {
