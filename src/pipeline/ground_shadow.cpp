@@ -329,6 +329,25 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   glActiveTexture(GL_TEXTURE0);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   if (!gles::checkGl("ground shadow pass", error)) return false;
+  // The part of the square that is darker than one 8-bit step anywhere: the
+  // composite draws only that every frame (on llvmpipe the whole 1 m square
+  // cost ~8 ms a frame; the shadow itself is usually a small part of it).
+  const auto fraction = readFraction(error);
+  if (!fraction) return false;
+  const int n = ground_size;
+  int i0 = n, j0 = n, i1 = -1, j1 = -1;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const glm::vec3& f = (*fraction)[static_cast<std::size_t>(j) * n + i];
+      if (std::min({f.r, f.g, f.b}) < 254.5f / 255.0f) {
+        i0 = std::min(i0, i), i1 = std::max(i1, i);
+        j0 = std::min(j0, j), j1 = std::max(j1, j);
+      }
+    }
+  if (i1 < 0) return true;  // nothing darkens the ground by a step: nothing to draw
+  // One texel of margin each way (bilinear reads reach half a texel out).
+  active_uv_min_ = glm::vec2(std::max(0, i0 - 1), std::max(0, j0 - 1)) / static_cast<float>(n);
+  active_uv_max_ = glm::vec2(std::min(n, i1 + 2), std::min(n, j1 + 2)) / static_cast<float>(n);
   has_shadow_ = true;
   return true;
 }
@@ -340,6 +359,8 @@ bool GroundShadow::drawOnCameraImage(const CameraIntrinsics& camera, const PoseC
   glUniform2f(composite_program_.uniform("u_region_centre_w"), static_cast<float>(region_.centre_w.x),
               static_cast<float>(region_.centre_w.y));
   glUniform1f(composite_program_.uniform("u_region_half_size_m"), static_cast<float>(region_.half_size_m));
+  glUniform2f(composite_program_.uniform("u_active_uv_min"), active_uv_min_.x, active_uv_min_.y);
+  glUniform2f(composite_program_.uniform("u_active_uv_max"), active_uv_max_.x, active_uv_max_.y);
   const glm::mat3 rotation(pose.R_cam_from_world);
   glUniformMatrix3fv(composite_program_.uniform("u_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
   glUniform3f(composite_program_.uniform("u_translation_cam_from_world"), static_cast<float>(pose.t_cam_from_world.x),

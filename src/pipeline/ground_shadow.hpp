@@ -49,8 +49,9 @@ class GroundShadow {
   bool update(const std::vector<ibl::ShadowLight>& lights, const ibl::ShadowCaster& caster, std::string& error);
 
   // Multiplies the camera pixels under the ground square by the fraction, in
-  // the bound framebuffer (which holds the camera background, drawn 1:1).
-  // Nothing when there is no shadow.
+  // the bound framebuffer (which holds the camera background, drawn 1:1):
+  // only the part of the square the shadow darkens by at least one 8-bit
+  // step. Nothing when there is no shadow.
   bool drawOnCameraImage(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                          const CameraFrameTexture& camera_frame, std::string& error);
 
@@ -92,6 +93,9 @@ class GroundShadow {
   gles::Buffer region_indices_;
   GLsizei region_index_count_ = 0;
   ibl::GroundRegion region_;
+  // The part of the ground texture that darkens anything (uv); the rest of
+  // the square is left alone by the composite.
+  glm::vec2 active_uv_min_{0.0f}, active_uv_max_{1.0f};
   bool has_shadow_ = false;
   int shadow_passes_last_update_ = 0;
 };
