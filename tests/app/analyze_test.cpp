@@ -137,6 +137,17 @@ TEST_P(AnalyzeSim, SeesWhatTheSimulatorRendered) {
   ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
   const nlohmann::json analysis = readAnalysis();
   EXPECT_FALSE(analysis.contains("error"));
+  // The dome of lights and the dominant light, as run fits them.
+  ASSERT_EQ(analysis["lights"].size(), 8u);
+  double ground_irradiance = 0.0;
+  for (const auto& light : analysis["lights"])
+    ground_irradiance += light["rgb"][1].get<double>() * std::max(0.0, light["direction"][2].get<double>());
+  // The dome gives the ground exactly its upper-hemisphere light
+  // (light_dome.hpp); the diffuse map's +Z entry is the same integral made
+  // by the cosine passes on a 16^2 map: within their 1-4% here.
+  const double diffuse_up = analysis["irradiance"][4]["rgb"][1].get<double>();
+  EXPECT_NEAR(ground_irradiance, diffuse_up, 0.06 * diffuse_up);
+  EXPECT_TRUE(analysis["dominant_light"].contains("direction"));
   // The simulator's ball is a perfect mirror: no rim step, so no edge fit, and a reason.
   EXPECT_FALSE(analysis["probe"]["edge_fit"]["ok"].get<bool>());
   EXPECT_TRUE(analysis["probe"]["edge_fit"].contains("reason"));
