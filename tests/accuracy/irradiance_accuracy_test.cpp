@@ -20,6 +20,7 @@
 
 #include "gles/capabilities.hpp"
 #include "gles/egl_context.hpp"
+#include "accuracy_test_support.hpp"
 #include "ibl/probe_outline.hpp"
 #include "ibl/spherical_harmonics.hpp"
 #include "pipeline/camera_frame_texture.hpp"
@@ -67,21 +68,7 @@ struct Accumulated {
   }
 };
 
-class IrradianceAccuracy : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    std::string error;
-    context_ = gles::EglContext::createHeadless(error).release();
-    ASSERT_NE(context_, nullptr) << error;
-  }
-  static void TearDownTestSuite() {
-    delete context_;
-    context_ = nullptr;
-  }
-  static gles::EglContext* context_;
-};
-
-gles::EglContext* IrradianceAccuracy::context_ = nullptr;
+class IrradianceAccuracy : public testing::GpuSuite {};
 
 TEST_F(IrradianceAccuracy, FourteenNormalsAcrossWorldsViewsAndFaceSizes) {
   const std::vector<std::string> environments = {

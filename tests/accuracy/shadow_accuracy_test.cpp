@@ -21,6 +21,7 @@
 
 #include "gles/capabilities.hpp"
 #include "gles/egl_context.hpp"
+#include "accuracy_test_support.hpp"
 #include "ibl/ground_shadow.hpp"
 #include "ibl/light_dome.hpp"
 #include "pipeline/camera_frame_texture.hpp"
@@ -96,20 +97,7 @@ struct Row {
   double mae_clipped = 0.0, mae_hdr = 0.0, darkest_truth = 1.0, darkest_gpu = 1.0;
 };
 
-class ShadowAccuracy : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    std::string error;
-    context_ = gles::EglContext::createHeadless(error).release();
-    ASSERT_NE(context_, nullptr) << error;
-  }
-  static void TearDownTestSuite() {
-    delete context_;
-    context_ = nullptr;
-  }
-  static gles::EglContext* context_;
-};
-gles::EglContext* ShadowAccuracy::context_ = nullptr;
+class ShadowAccuracy : public testing::GpuSuite {};
 
 TEST_F(ShadowAccuracy, GroundAttenuationAgainstTheTruthAndTheDominantLightAgainstTheSun) {
   struct World {
