@@ -233,6 +233,8 @@ bool splitAtMedian(const HemisphereGrid& grid, const Region& region, Region& fir
   return true;
 }
 
+std::vector<Region> fixedRegions(const HemisphereGrid& grid, int count);
+
 std::vector<Region> medianCutRegions(const HemisphereGrid& grid, int count) {
   std::vector<Region> regions{{0, grid.width, 0, grid.height}};
   // Debevec's median cut splits every region at each level; for a count
@@ -268,9 +270,9 @@ std::vector<Region> medianCutRegions(const HemisphereGrid& grid, int count) {
 // light moves to its cells' first moment. This lowers the energy-weighted
 // angular spread of the lights, the blur of their shadows, so a small bright
 // lamp ends with a light at its centre and a region that is mostly lamp.
-std::vector<std::vector<std::size_t>> clusteredRegions(const HemisphereGrid& grid, int count) {
+std::vector<std::vector<std::size_t>> clusteredRegions(const HemisphereGrid& grid, const std::vector<Region>& start) {
   std::vector<glm::dvec3> centres;
-  for (const Region& region : medianCutRegions(grid, count)) centres.push_back(lightOf(grid, cellsOf(grid, region)).direction_w);
+  for (const Region& region : start) centres.push_back(lightOf(grid, cellsOf(grid, region)).direction_w);
   const std::size_t cells = grid.radiance.size();
   std::vector<std::vector<std::size_t>> members(centres.size());
   constexpr int kIterations = 12;
@@ -326,6 +328,27 @@ std::vector<Region> fixedRegions(const HemisphereGrid& grid, int count) {
   return regions;
 }
 
+// The largest relative error, over 48 normals with z >= 0.5 (a Fibonacci
+// spiral over that cap), of the lights' irradiance against the grid's exact
+// upper-hemisphere irradiance (per-cell moments); 0 where the grid is dark.
+double worstUpperIrradianceError(const HemisphereGrid& grid, const std::vector<DomeLight>& lights) {
+  constexpr int kNormals = 48;
+  double worst = 0.0;
+  const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
+  for (int k = 0; k < kNormals; ++k) {
+    const double z = 1.0 - 0.5 * (k + 0.5) / kNormals;  // uniform in area over z in [0.5, 1]
+    const double ring = std::sqrt(1.0 - z * z);
+    const glm::dvec3 n(ring * std::cos(golden_angle * k), ring * std::sin(golden_angle * k), z);
+    double truth = 0.0;
+    for (std::size_t i = 0; i < grid.radiance.size(); ++i)
+      truth += luminance(grid.radiance[i]) * std::max(0.0, glm::dot(n, grid.moment[i]));
+    double dome = 0.0;
+    for (const DomeLight& light : lights) dome += luminance(light.rgb) * std::max(0.0, glm::dot(n, light.direction_w));
+    if (truth > 0.0) worst = std::max(worst, std::abs(dome - truth) / truth);
+  }
+  return worst;
+}
+
 }  // namespace
 
 const char* toString(DomePlacement placement) {
@@ -343,8 +366,23 @@ std::vector<DomeLight> fitLightDome(const CubeMapRGB& radiance, const std::vecto
   if (settings.light_count < 1) return lights;
   const HemisphereGrid grid = resample(radiance, validity, settings, 0.0);
   if (settings.placement == DomePlacement::kClustered) {
-    for (const std::vector<std::size_t>& cells : clusteredRegions(grid, settings.light_count))
-      if (!cells.empty()) lights.push_back(lightOf(grid, cells));
+    // k-means finds a local optimum that depends on where it starts; start
+    // from both the median cut and the fixed regions and keep the dome that
+    // best reproduces the upper hemisphere's irradiance, the dome's job, at
+    // the worst of a set of normals with z >= 0.5 (exact per-cell integrals
+    // of the grid are the reference).
+    double best_worst = std::numeric_limits<double>::infinity();
+    for (const std::vector<Region>& start :
+         {medianCutRegions(grid, settings.light_count), fixedRegions(grid, settings.light_count)}) {
+      std::vector<DomeLight> candidate;
+      for (const std::vector<std::size_t>& cells : clusteredRegions(grid, start))
+        if (!cells.empty()) candidate.push_back(lightOf(grid, cells));
+      const double worst = worstUpperIrradianceError(grid, candidate);
+      if (lights.empty() || worst < best_worst) {
+        best_worst = worst;
+        lights = std::move(candidate);
+      }
+    }
     return lights;
   }
   const std::vector<Region> regions = settings.placement == DomePlacement::kFixedRegions

@@ -21,12 +21,14 @@
 //   measured times cos(elevation), so that sides compare as arcs). Regions
 //   end with equal energy, so a lamp holding a quarter of the light is cut
 //   into several regions that each mix a piece of it with sky.
-// - kClustered: the median cut's lights refined by energy-weighted k-means on
-//   the sphere (Lloyd's iterations: each cell to the nearest light, each
-//   light to its cells' first moment), which minimises the energy-weighted
-//   angular spread of the lights, i.e. the blur of their shadows. The lamp's
-//   pieces merge back into one light at its centre; regions are the lights'
-//   Voronoi cells.
+// - kClustered: energy-weighted k-means on the sphere (Lloyd's iterations:
+//   each cell to the nearest light, each light to its cells' first moment),
+//   which minimises the energy-weighted angular spread of the lights, i.e.
+//   the blur of their shadows. The lamp's pieces merge back into one light at
+//   its centre; regions are the lights' Voronoi cells. k-means ends in a
+//   local optimum that depends on its start: it is run from the median cut
+//   and from the fixed regions, and the dome that reproduces the upper
+//   hemisphere's irradiance better (at the worst normal with z >= 0.5) is kept.
 //
 // Each light also carries its region's angular spread (within what angle of
 // its direction half its energy lies), which sets how soft its shadow is.
