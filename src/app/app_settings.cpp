@@ -127,6 +127,15 @@ AppSettings loadAppSettings(const std::string& path) {
       lights.readDouble("refit_change_fraction", light_settings.refit_change_fraction, Range::openClosed(0.0, 10.0));
   lights.rejectUnknownFields();
 
+  ConfigReader button = file.section("button");
+  GpioButtonSettings& gpio = settings.button.gpio;
+  gpio.chip = button.readString("chip", gpio.chip);
+  gpio.line = button.readInt("line", gpio.line, Range::closed(0, 1023));
+  gpio.debounce.debounce_ms = button.readDouble("debounce_ms", gpio.debounce.debounce_ms, Range::closed(0.0, 1000.0));
+  gpio.debounce.long_press_ms =
+      button.readDouble("long_press_ms", gpio.debounce.long_press_ms, Range::closed(100.0, 60000.0));
+  button.rejectUnknownFields();
+
   ConfigReader refinement = file.section("probe_refinement");
   settings.probe_refinement.enabled = refinement.readBool("enabled", settings.probe_refinement.enabled);
   settings.probe_refinement.weight =

@@ -9,6 +9,7 @@
 #include "app/lighting_state_machine.hpp"
 #include "app/map_update_policy.hpp"
 #include "ibl/light_dome.hpp"
+#include "input/gpio_button.hpp"
 #include "pipeline/environment_maps.hpp"
 #include "tracking/pose_smoother.hpp"
 
@@ -91,6 +92,10 @@ struct SimConfig {
   glm::dvec3 ball_offset_m{0.0};
 };
 
+struct ButtonConfig {
+  GpioButtonSettings gpio;  // chip, line, debounce and long press (--button gpio)
+};
+
 struct AppSettings {
   EnvironmentMapConfig maps;
   TrackingConfig tracking;
@@ -99,6 +104,7 @@ struct AppSettings {
   MapUpdateSettings map_updates;  // when the maps are rebuilt (map_update_policy.hpp)
   ProbeRefinementConfig probe_refinement;
   LightsConfig lights;
+  ButtonConfig button;
   SimConfig sim;
   int save_every = 1;     // write every K-th composited frame; 0 = none
   bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)

@@ -71,7 +71,7 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
       {"--source", [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images"}); options.source = v; }},
       {"--images", [&](auto&, auto& v) { options.images = v; }},
       {"--display", [&](auto& f, auto& v) { requireChoice(f, v, {"headless"}); options.display = v; }},
-      {"--button", [&](auto& f, auto& v) { requireChoice(f, v, {"none", "key"}); options.button = v; }},
+      {"--button", [&](auto& f, auto& v) { requireChoice(f, v, {"none", "key", "gpio"}); options.button = v; }},
       {"--key-input", [&](auto&, auto& v) { options.key_path = v; }},
       {"--frames", [&](auto& f, auto& v) { options.frames = parseInteger(f, v, 0); }},
       {"--out", [&](auto&, auto& v) { options.out_dir = v; }},
@@ -257,7 +257,8 @@ run flags:
   --rig rig.yaml               tag and mirror-ball geometry (sim: overrides the simulated rig)
   --config probelight.yaml     pipeline settings (see board/probelight.yaml)
   --display headless           headless EGL on Mesa, frames written as PNG
-  --button none|key            recalibration button (key: lines on stdin or a FIFO)
+  --button none|key|gpio       recalibration button (key: lines on stdin or a FIFO; gpio: the board's
+                               button, probelight.yaml's button section)
   --key-input PATH             where --button key reads ('-' = stdin, default)
   --frames N                   frames to process, 0 = until the source ends (default 300)
   --save-every K               write every K-th composited frame as PNG, 0 = none (default 1)

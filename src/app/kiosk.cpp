@@ -249,8 +249,16 @@ class Kiosk {
     }
 
     std::string error;
-    button_ = makeButtonSource(options_.button, options_.key_path, error);
-    if (!button_ || !button_->start(error)) return fail(2, error);
+    button_ = makeButtonSource(options_.button, options_.key_path, settings.button.gpio, error);
+    if (!button_) return fail(2, error);
+    if (!button_->start(error)) {
+      // A board without the GPIO chip (or a desktop) still runs the kiosk:
+      // without a button, said once.
+      if (options_.button != "gpio") return fail(2, error);
+      log_ << "probelight: warning: " << error << "; running without a button\n";
+      report_.extra["button_warning"] = error;
+      button_ = std::make_unique<NoButton>();
+    }
     if (!source_->start(error)) return fail(options_.source == "images" ? 2 : 1, error);
 
     material_ = objectMaterial(settings);

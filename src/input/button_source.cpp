@@ -1,4 +1,5 @@
 #include "input/button_source.hpp"
+#include "input/gpio_button.hpp"
 
 #include <cerrno>
 #include <cstring>
@@ -105,10 +106,11 @@ std::vector<ButtonEvent> KeyButton::poll() {
 }
 
 std::unique_ptr<ButtonSource> makeButtonSource(const std::string& kind, const std::string& key_path,
-                                               std::string& error) {
+                                               const GpioButtonSettings& gpio, std::string& error) {
   if (kind == "none") return std::make_unique<NoButton>();
   if (kind == "key") return std::make_unique<KeyButton>(key_path.empty() ? "-" : key_path);
-  error = "unknown button source '" + kind + "' (choose none or key)";
+  if (kind == "gpio") return std::make_unique<GpioButton>(gpio);
+  error = "unknown button source '" + kind + "' (choose none, key or gpio)";
   return nullptr;
 }
 

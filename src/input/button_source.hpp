@@ -1,6 +1,7 @@
-// The button seam. A press means "recalibrate the lights". Implementations:
-// `none`, `key` (lines on stdin or a FIFO, for desktops and tests); libgpiod
-// comes with the board issue.
+// The button seam. A press means "recalibrate the lights"; a long press
+// "go back to the stored lighting". Implementations: `none`, `key` (lines on
+// stdin or a FIFO, for desktops and tests), `gpio` (the board's button,
+// input/gpio_button.hpp).
 #pragma once
 
 #include <atomic>
@@ -65,7 +66,11 @@ class KeyButton final : public ButtonSource {
   std::atomic<bool> stopping_{false};
 };
 
-// Factory by configuration name: "none" or "key[:PATH]".
-std::unique_ptr<ButtonSource> makeButtonSource(const std::string& kind, const std::string& key_path, std::string& error);
+struct GpioButtonSettings;
+
+// Factory by configuration name: "none", "key" (reading key_path) or "gpio"
+// (the line `gpio` names).
+std::unique_ptr<ButtonSource> makeButtonSource(const std::string& kind, const std::string& key_path,
+                                               const GpioButtonSettings& gpio, std::string& error);
 
 }  // namespace probelight

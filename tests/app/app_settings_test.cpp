@@ -64,6 +64,10 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_DOUBLE_EQ(from_file.lights.max_shadow_reach_m, defaults.lights.max_shadow_reach_m);
   EXPECT_EQ(from_file.lights.refit_when_light_changes, defaults.lights.refit_when_light_changes);
   EXPECT_DOUBLE_EQ(from_file.lights.refit_change_fraction, defaults.lights.refit_change_fraction);
+  EXPECT_EQ(from_file.button.gpio.chip, defaults.button.gpio.chip);
+  EXPECT_EQ(from_file.button.gpio.line, defaults.button.gpio.line);
+  EXPECT_DOUBLE_EQ(from_file.button.gpio.debounce.debounce_ms, defaults.button.gpio.debounce.debounce_ms);
+  EXPECT_DOUBLE_EQ(from_file.button.gpio.debounce.long_press_ms, defaults.button.gpio.debounce.long_press_ms);
   EXPECT_EQ(from_file.probe_refinement.enabled, defaults.probe_refinement.enabled);
   EXPECT_DOUBLE_EQ(from_file.probe_refinement.weight, defaults.probe_refinement.weight);
   EXPECT_EQ(from_file.sim.ball_offset_m, defaults.sim.ball_offset_m);

@@ -244,6 +244,25 @@ TEST_F(EndToEnd, LampSwitchingOnRefitsTheLightsWhenAsked) {
   EXPECT_EQ(calm_report["counters"]["calibrations_completed"], 1);
 }
 
+// --button gpio on a machine without the GPIO chip (this one, a desktop, or
+// a board with the wrong chip configured): the kiosk runs without a button
+// and says so once.
+TEST_F(EndToEnd, GpioButtonWithoutAChipWarnsOnceAndRuns) {
+  if (fs::exists("/dev/gpiochip0")) GTEST_SKIP() << "this machine has a GPIO chip";
+  const fs::path out = dir_ / "out";
+  const CommandResult result = run("run --frames 3 --save-every 0 --button gpio --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  std::size_t warnings = 0;
+  for (std::size_t at = result.stderr_text.find("warning: button:"); at != std::string::npos;
+       at = result.stderr_text.find("warning: button:", at + 1))
+    ++warnings;
+  EXPECT_EQ(warnings, 1u) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find("running without a button"), std::string::npos) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  EXPECT_EQ(report["frames"], 3);
+  EXPECT_NE(report["button_warning"].get<std::string>().find("gpiochip0"), std::string::npos);
+}
+
 // diffuse_method: sh9 runs the whole kiosk through the SH9 stage, names it in
 // the report, and measures within the same bound as the cosine passes on a
 // smooth sky (SH9 is exact for bands 0-2, which hold an overcast sky).

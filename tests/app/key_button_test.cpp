@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "input/button_source.hpp"
+#include "input/gpio_button.hpp"
 
 namespace probelight {
 namespace {
@@ -74,9 +75,9 @@ TEST(KeyButton, MissingPathIsAClearError) {
 
 TEST(ButtonFactory, RejectsUnknownKinds) {
   std::string error;
-  EXPECT_EQ(makeButtonSource("gpio-typo", "", error), nullptr);
+  EXPECT_EQ(makeButtonSource("gpio-typo", "", GpioButtonSettings{}, error), nullptr);
   EXPECT_NE(error.find("gpio-typo"), std::string::npos);
-  EXPECT_NE(makeButtonSource("none", "", error), nullptr);
+  EXPECT_NE(makeButtonSource("none", "", GpioButtonSettings{}, error), nullptr);
 }
 
 }  // namespace

@@ -273,7 +273,8 @@ std::vector<BadField> badFields() {
       {"map_updates", "smoothing_new_weight"},   {"sim", "noise_sigma"},
       {"sim", "sun_azimuth_rate_deg_per_frame"}, {"probe_refinement", "weight"},
       {"lights", "fade_s"},                      {"lights", "max_shadow_reach"},
-      {"lights", "refit_change_fraction"}};
+      {"lights", "refit_change_fraction"},      {"button", "debounce_ms"},
+      {"button", "long_press_ms"}};
   for (const auto& [section, name] : app_scalars)
     out.push_back({"probelight", section + ":\n  " + name + ": VALUE\n", section + "." + name});
   for (const std::string name : {"static_cutoff_hz", "max_lag_px", "speed_cutoff_hz", "reset_jump_px"})
@@ -320,7 +321,7 @@ std::vector<BadField> badFields() {
 
 TEST_F(Stress, NanOrInfInAnyFloatFieldIsOneLineAndExit2) {
   const std::vector<BadField> fields = badFields();
-  ASSERT_EQ(fields.size(), 19u + 4u + 3u + 6u + 14u + 6u);
+  ASSERT_EQ(fields.size(), 21u + 4u + 3u + 6u + 14u + 6u);
   for (const BadField& bad : fields) {
     for (const char* value : {".nan", ".inf", "-.inf"}) {
       std::string yaml = bad.yaml;

@@ -1,0 +1,50 @@
+// The board's push button on a GPIO line, through libgpiod (v1 API, as
+// Debian bookworm and Raspberry Pi OS bookworm ship it: 1.6): the line is
+// requested with pull-up bias and active-low (the button shorts it to
+// ground), edge events on both edges are read on a thread of their own and
+// turned into presses by ButtonDebouncer.
+#pragma once
+
+#include <atomic>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "input/button_source.hpp"
+#include "input/debounce.hpp"
+
+struct gpiod_chip;
+struct gpiod_line;
+
+namespace probelight {
+
+struct GpioButtonSettings {
+  std::string chip = "gpiochip0";  // name, number, path or label, as gpiod_chip_open_lookup takes it
+  int line = 17;                   // BCM 17: header pin 11, next to ground on pin 9
+  DebounceSettings debounce;
+};
+
+class GpioButton final : public ButtonSource {
+ public:
+  explicit GpioButton(GpioButtonSettings settings);
+  ~GpioButton() override;
+  // False, with a one-line reason naming the chip and line and the usual
+  // causes, when the chip or the line cannot be had.
+  bool start(std::string& error) override;
+  std::vector<ButtonEvent> poll() override;
+  std::string name() const override;
+
+ private:
+  void readLoop();
+
+  GpioButtonSettings settings_;
+  gpiod_chip* chip_ = nullptr;
+  gpiod_line* line_ = nullptr;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::vector<ButtonEvent> pending_;
+  std::atomic<bool> stopping_{false};
+};
+
+}  // namespace probelight
