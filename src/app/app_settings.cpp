@@ -136,6 +136,10 @@ AppSettings loadAppSettings(const std::string& path) {
       button.readDouble("long_press_ms", gpio.debounce.long_press_ms, Range::closed(100.0, 60000.0));
   button.rejectUnknownFields();
 
+  ConfigReader state = file.section("state");
+  settings.state.dir = state.readString("dir", settings.state.dir);
+  state.rejectUnknownFields();
+
   ConfigReader refinement = file.section("probe_refinement");
   settings.probe_refinement.enabled = refinement.readBool("enabled", settings.probe_refinement.enabled);
   settings.probe_refinement.weight =

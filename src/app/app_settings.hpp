@@ -96,6 +96,11 @@ struct ButtonConfig {
   GpioButtonSettings gpio;  // chip, line, debounce and long press (--button gpio)
 };
 
+// Where the kiosk keeps what must survive a restart (app/state_store.hpp).
+struct StateConfig {
+  std::string dir;  // empty: nothing is kept (the desktop default; the board uses /var/lib/probelight)
+};
+
 struct AppSettings {
   EnvironmentMapConfig maps;
   TrackingConfig tracking;
@@ -105,6 +110,7 @@ struct AppSettings {
   ProbeRefinementConfig probe_refinement;
   LightsConfig lights;
   ButtonConfig button;
+  StateConfig state;
   SimConfig sim;
   int save_every = 1;     // write every K-th composited frame; 0 = none
   bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)

@@ -19,6 +19,7 @@
 #include "app/map_update_policy.hpp"
 #include "app/run_report.hpp"
 #include "app/stage_settings.hpp"
+#include "app/state_store.hpp"
 #include "capture/image_frame_source.hpp"
 #include "capture/sim_frame_source.hpp"
 #include "config/camera_file.hpp"
@@ -263,6 +264,7 @@ class Kiosk {
 
     material_ = objectMaterial(settings);
     object_center_w_ = glm::dvec3(settings.object.position_w, settings.object.radius_m);
+    loadStoredLighting();
     machine_ = LightingStateMachine(settings.recalibration);
     map_policy_ = MapUpdatePolicy(settings.map_updates);
     return 0;
@@ -347,8 +349,19 @@ class Kiosk {
 
   void pollButton() {
     for (const ButtonEvent& event : button_->poll()) {
-      if (event.kind != ButtonEvent::Kind::kPress) {
-        report_.count("button_long_presses_ignored");
+      if (event.kind == ButtonEvent::Kind::kLongPress) {
+        // Back to the lighting stored at start-up (a fit that went wrong,
+        // someone standing in front of the ball, is undone).
+        if (stored_lighting_ && machine_.state() == AppState::kRunning) {
+          showStoredLighting(frame_time_s_);
+          report_.count("button_long_presses_restored");
+          if (!options_.quiet) log_ << "probelight: button: long press: back to the stored lighting\n";
+        } else {
+          report_.count("button_long_presses_ignored");
+          if (!options_.quiet)
+            log_ << "probelight: button: long press ignored ("
+                 << (stored_lighting_ ? "recalibrating" : "no stored lighting") << ")\n";
+        }
         continue;
       }
       const bool was_running = machine_.state() == AppState::kRunning;
@@ -579,6 +592,14 @@ class Kiosk {
     lighting_.highlight_direction_w = glm::vec3(light.direction_w);
     lighting_.highlight_rgb = glm::vec3(light.rgb);
     report_.count("calibrations_completed");
+    if (!inputs_.settings.state.dir.empty()) {
+      // Kept for the next start; a failed write leaves the old file whole.
+      std::string save_error;
+      if (saveLighting(inputs_.settings.state.dir, {dome, light, ibl::toString(config.dome.placement)}, save_error))
+        report_.count("state_saves");
+      else
+        log_ << "probelight: warning: lighting not saved: " << save_error << "\n";
+    }
     nlohmann::json lights = nlohmann::json::array();
     for (const ibl::DomeLight& l : dome)
       lights.push_back({{"direction", {l.direction_w.x, l.direction_w.y, l.direction_w.z}},
@@ -596,6 +617,36 @@ class Kiosk {
            << ibl::toString(config.dome.placement) << "), dominant light toward " << formatVector(light.direction_w)
            << " rgb " << formatVector(light.rgb) << "\n";
     return 0;
+  }
+
+  // The last good lighting from the state directory: shown from the first
+  // frame (the start-up fit then fades from it), and what a long press goes
+  // back to. A missing file is normal (first boot); an unreadable one is
+  // said, and the kiosk starts without it.
+  void loadStoredLighting() {
+    const std::string& dir = inputs_.settings.state.dir;
+    nlohmann::json state = {{"dir", dir}, {"loaded", false}};
+    if (!dir.empty()) {
+      std::string error;
+      stored_lighting_ = loadLighting(dir, error);
+      if (stored_lighting_) {
+        showStoredLighting(0.0);
+        state["loaded"] = true;
+        if (!options_.quiet)
+          log_ << "probelight: lighting from " << lightingStatePath(dir).string() << " (" << stored_lighting_->lights.size()
+               << " lights)\n";
+      } else if (!error.empty()) {
+        state["error"] = error;
+        log_ << "probelight: warning: " << error << "; starting without stored lighting\n";
+      }
+    }
+    report_.extra["state"] = state;
+  }
+
+  void showStoredLighting(double now_s) {
+    light_transition_.retarget(stored_lighting_->lights, now_s);
+    lighting_.highlight_direction_w = glm::vec3(stored_lighting_->dominant.direction_w);
+    lighting_.highlight_rgb = glm::vec3(stored_lighting_->dominant.rgb);
   }
 
   // lights.refit_when_light_changes: at each map update (the policy already
@@ -795,6 +846,7 @@ class Kiosk {
   std::vector<ibl::ShadowLight> shadow_lights_;  // what the shadow maps show
   bool shadows_drawn_ = false;
   std::uint64_t last_shadow_update_frame_ = 0;
+  std::optional<StoredLighting> stored_lighting_;  // loaded from the state directory at start-up
   std::map<std::string, long long> tag_status_frames_;
   nlohmann::json last_tag_problem_;  // null until a frame's tag is not usable
   // probe_refinement's correction of rig.yaml's ball, and its record.

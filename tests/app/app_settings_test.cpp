@@ -68,6 +68,7 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.button.gpio.line, defaults.button.gpio.line);
   EXPECT_DOUBLE_EQ(from_file.button.gpio.debounce.debounce_ms, defaults.button.gpio.debounce.debounce_ms);
   EXPECT_DOUBLE_EQ(from_file.button.gpio.debounce.long_press_ms, defaults.button.gpio.debounce.long_press_ms);
+  EXPECT_EQ(from_file.state.dir, defaults.state.dir);
   EXPECT_EQ(from_file.probe_refinement.enabled, defaults.probe_refinement.enabled);
   EXPECT_DOUBLE_EQ(from_file.probe_refinement.weight, defaults.probe_refinement.weight);
   EXPECT_EQ(from_file.sim.ball_offset_m, defaults.sim.ball_offset_m);

@@ -23,6 +23,7 @@
 
 #include "binary_test_support.hpp"
 #include "config/camera_file.hpp"
+#include "app/state_store.hpp"
 #include "config/rig_file.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/scene_geometry.hpp"
@@ -261,6 +262,38 @@ TEST_F(EndToEnd, GpioButtonWithoutAChipWarnsOnceAndRuns) {
   const nlohmann::json report = readReport(out);
   EXPECT_EQ(report["frames"], 3);
   EXPECT_NE(report["button_warning"].get<std::string>().find("gpiochip0"), std::string::npos);
+}
+
+// state.dir: the fit is saved; the next start shows it from the first frame
+// (and says so in the report); a damaged file is said once and the kiosk
+// starts without it.
+TEST_F(EndToEnd, LightingIsKeptInTheStateDirectoryAcrossRuns) {
+  const fs::path state = dir_ / "state";
+  const fs::path config = dir_ / "state.yaml";
+  std::ofstream(config) << "state:\n  dir: " << state.string() << "\n";
+  const std::string flags = "run --frames 8 --save-every 0 --path static --config " + config.string();
+  CommandResult first = run(flags + " --out " + (dir_ / "first").string());
+  ASSERT_EQ(first.exit_status, 0) << first.stderr_text;
+  nlohmann::json report = readReport(dir_ / "first");
+  EXPECT_FALSE(report["state"]["loaded"].get<bool>()) << "nothing stored before the first run";
+  EXPECT_EQ(report["counters"]["state_saves"], 1);
+  ASSERT_TRUE(fs::exists(state / "lighting.json"));
+
+  CommandResult second = run(flags + " --out " + (dir_ / "second").string());
+  ASSERT_EQ(second.exit_status, 0) << second.stderr_text;
+  report = readReport(dir_ / "second");
+  EXPECT_TRUE(report["state"]["loaded"].get<bool>());
+  EXPECT_NE(second.stderr_text.find("lighting from"), std::string::npos) << second.stderr_text;
+
+  std::ofstream(state / "lighting.json") << "{ not json";
+  CommandResult damaged = run(flags + " --out " + (dir_ / "damaged").string());
+  ASSERT_EQ(damaged.exit_status, 0) << damaged.stderr_text;
+  report = readReport(dir_ / "damaged");
+  EXPECT_FALSE(report["state"]["loaded"].get<bool>());
+  EXPECT_NE(report["state"]["error"].get<std::string>().find("lighting.json"), std::string::npos);
+  // The run's own fit replaced the damaged file with a good one.
+  std::string error;
+  EXPECT_TRUE(loadLighting(state, error)) << error;
 }
 
 // diffuse_method: sh9 runs the whole kiosk through the SH9 stage, names it in

@@ -1,0 +1,106 @@
+// The state directory: atomic replacement survives a kill between the write
+// and the rename; the lighting file round-trips and a damaged one is a clear
+// error, not a crash.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "app/state_store.hpp"
+
+namespace probelight {
+namespace {
+
+namespace fs = std::filesystem;
+
+class StateStore : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("probelight_state_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  static std::string read(const fs::path& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  }
+  fs::path dir_;
+};
+
+TEST_F(StateStore, AKillBetweenWriteAndRenameLeavesTheOldFileWhole) {
+  const fs::path path = dir_ / "lighting.json";
+  std::string error;
+  ASSERT_TRUE(writeFileAtomically(path, "old state\n", error)) << error;
+  const std::string big_new(1 << 20, 'n');  // 1 MB: a torn write would show
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    std::string child_error;
+    writeFileAtomically(path, big_new, child_error, [] { ::raise(SIGKILL); });
+    _exit(0);  // not reached
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "the child must die mid-write";
+  EXPECT_EQ(read(path), "old state\n");
+  // The dead writer's temporary file may be left; the next write replaces the file all the same.
+  ASSERT_TRUE(writeFileAtomically(path, big_new, error)) << error;
+  EXPECT_EQ(read(path).size(), big_new.size());
+}
+
+TEST_F(StateStore, WriteFailureKeepsTheOldFileAndSaysWhy) {
+  std::string error;
+  EXPECT_FALSE(writeFileAtomically(dir_ / "no_such_dir" / "x.json", "data", error));
+  EXPECT_NE(error.find("cannot create"), std::string::npos) << error;
+}
+
+TEST_F(StateStore, LightingRoundTripsAndDamagedFilesAreClearErrors) {
+  StoredLighting lighting;
+  ibl::DomeLight light;
+  light.direction_w = glm::normalize(glm::dvec3(0.3, -0.2, 0.9));
+  light.rgb = {0.4, 0.5, 0.6};
+  light.spread_rad = 0.12;
+  lighting.lights = {light, light};
+  lighting.dominant.found = true;
+  lighting.dominant.direction_w = light.direction_w;
+  lighting.dominant.rgb = light.rgb;
+  lighting.placement = "clustered";
+  std::string error;
+  ASSERT_TRUE(saveLighting(dir_ / "state", lighting, error)) << error;  // creates the directory
+  const auto loaded = loadLighting(dir_ / "state", error);
+  ASSERT_TRUE(loaded) << error;
+  ASSERT_EQ(loaded->lights.size(), 2u);
+  EXPECT_NEAR(glm::length(loaded->lights[0].direction_w - light.direction_w), 0.0, 1e-12);
+  EXPECT_EQ(loaded->lights[1].rgb, light.rgb);
+  EXPECT_EQ(loaded->placement, "clustered");
+  EXPECT_TRUE(loaded->dominant.found);
+
+  // No file yet: nothing, and no error (the first boot).
+  EXPECT_FALSE(loadLighting(dir_ / "empty", error));
+  EXPECT_TRUE(error.empty()) << error;
+  // Damaged: cut short, wrong format, a non-finite or non-unit value.
+  const fs::path path = lightingStatePath(dir_ / "state");
+  const std::string good = read(path);
+  for (const std::string& bad : {good.substr(0, good.size() / 2), std::string("{\"format\": \"something else\"}"),
+                                 std::string("{\"format\": \"probelight lighting 1\", \"lights\": [{\"direction\": [0, 0, 2], "
+                                             "\"rgb\": [1, 1, 1], \"spread_rad\": 0.1}], \"dominant_light\": {\"found\": "
+                                             "false, \"direction\": [0, 0, 1], \"rgb\": [0, 0, 0]}}")}) {
+    std::ofstream(path) << bad;
+    EXPECT_FALSE(loadLighting(dir_ / "state", error)) << bad;
+    EXPECT_NE(error.find(path.string()), std::string::npos) << error;
+  }
+}
+
+}  // namespace
+}  // namespace probelight
