@@ -12,10 +12,10 @@ packages=(
   libglm-dev nlohmann-json3-dev
   # GLES2 through EGL; Mesa's llvmpipe renders headless on machines without a GPU
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
-  # board backends (camera, KMS display, GPIO button)
-  libcamera-dev libgbm-dev libdrm-dev libgpiod-dev
-  # tests and benchmarks
-  libgtest-dev libbenchmark-dev
+  # board backends (camera, KMS display, GPIO button, the systemd service's notifications)
+  libcamera-dev libgbm-dev libdrm-dev libgpiod-dev libsystemd-dev
+  # tests and benchmarks (systemd-analyze checks the unit file)
+  libgtest-dev libbenchmark-dev systemd
 )
 
 missing=()

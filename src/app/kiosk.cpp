@@ -18,6 +18,7 @@
 #include "app/lighting_state_machine.hpp"
 #include "app/map_update_policy.hpp"
 #include "app/run_report.hpp"
+#include "app/service_notify.hpp"
 #include "app/stage_settings.hpp"
 #include "app/state_store.hpp"
 #include "capture/image_frame_source.hpp"
@@ -221,6 +222,7 @@ class Kiosk {
     if (const int status = setUp(); status != 0) return status;
     const auto loop_start = std::chrono::steady_clock::now();
     const int status = frameLoop();
+    notifier_.stopping();
     const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
     source_->stop();
     if (status != 0) return status;
@@ -742,6 +744,16 @@ class Kiosk {
         if (auto* headless = dynamic_cast<HeadlessDisplay*>(display_.get())) headless->keepNextFrame();
       if (!display_->present(frame_number, error)) return fail(1, error);
     }
+    {
+      // systemd: ready once the first frame is shown, then the watchdog
+      // from here, so a hung camera or GPU stops the pings.
+      notifier_.ready("showing frames from " + source_->name() + " on " + display_->describe());
+      notifier_.frameShown();
+      if (status != last_notified_status_) {
+        notifier_.status(status.empty() ? "tracking" : status);
+        last_notified_status_ = status;
+      }
+    }
     return 0;
   }
 
@@ -847,6 +859,8 @@ class Kiosk {
   bool shadows_drawn_ = false;
   std::uint64_t last_shadow_update_frame_ = 0;
   std::optional<StoredLighting> stored_lighting_;  // loaded from the state directory at start-up
+  ServiceNotifier notifier_;
+  std::string last_notified_status_;
   std::map<std::string, long long> tag_status_frames_;
   nlohmann::json last_tag_problem_;  // null until a frame's tag is not usable
   // probe_refinement's correction of rig.yaml's ball, and its record.

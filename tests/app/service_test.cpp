@@ -1,0 +1,149 @@
+// The systemd service: the unit file through systemd-analyze (verify, and the
+// hardening score), and the kiosk's notifications through a real
+// NOTIFY_SOCKET: READY=1 after the first frame, the watchdog, STOPPING=1.
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstring>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "binary_test_support.hpp"
+
+namespace probelight {
+namespace {
+
+namespace fs = std::filesystem;
+const fs::path kUnit = fs::path(PROBELIGHT_TEST_DATA_DIR) / ".." / ".." / "systemd" / "probelight.service";
+
+std::string runCapturing(const std::string& command, int& status) {
+  std::string output;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) {
+    status = -1;
+    return output;
+  }
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  status = ::pclose(pipe);
+  return output;
+}
+
+bool haveSystemdAnalyze() {
+  int status = 0;
+  runCapturing("command -v systemd-analyze", status);
+  return status == 0;
+}
+
+class ServiceUnit : public testing::BinaryTest {
+ protected:
+  ServiceUnit() : BinaryTest("service") {}
+};
+
+// `systemd-analyze verify` checks every directive and that ExecStart's
+// program exists and is executable; the unit names the installed path, so
+// the test checks a copy pointing at the binary just built.
+TEST_F(ServiceUnit, VerifiesCleanly) {
+  if (!haveSystemdAnalyze()) GTEST_SKIP() << "systemd-analyze is not installed";
+  std::ifstream in(kUnit);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string unit = std::regex_replace(text.str(), std::regex("/usr/bin/probelight"), PROBELIGHT_BINARY);
+  ASSERT_NE(unit, text.str()) << "ExecStart must name /usr/bin/probelight";
+  const fs::path copy = dir_ / "probelight.service";
+  std::ofstream(copy) << unit;
+  int status = 0;
+  const std::string output = runCapturing("cd " + dir_.string() + " && systemd-analyze verify " + copy.string(), status);
+  EXPECT_EQ(status, 0) << output;
+  EXPECT_TRUE(output.empty()) << output;
+  // What the kiosk needs from it.
+  for (const char* line : {"Type=notify", "WatchdogSec=", "Restart=on-failure", "User=probelight",
+                           "SupplementaryGroups=video render gpio", "StateDirectory=probelight"})
+    EXPECT_NE(unit.find(line), std::string::npos) << line;
+}
+
+// The aim: an exposure score of 2.0 or less.
+TEST_F(ServiceUnit, HardeningScoreIsTwoOrLess) {
+  if (!haveSystemdAnalyze()) GTEST_SKIP() << "systemd-analyze is not installed";
+  int status = 0;
+  const std::string output = runCapturing("cd " + dir_.string() + " && systemd-analyze security --offline=true " +
+                                              kUnit.string(), status);
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(output, match, std::regex("Overall exposure level for probelight.service: ([0-9.]+)")))
+      << output;
+  const double score = std::stod(match[1]);
+  std::printf("[ service  ] systemd-analyze security: %.1f\n", score);
+  EXPECT_LE(score, 2.0) << output;
+}
+
+// A datagram socket standing in for systemd's: the kiosk, run with
+// NOTIFY_SOCKET and WATCHDOG_USEC pointing at it, must say READY=1 once,
+// ping the watchdog, and say STOPPING=1 at the end.
+TEST_F(ServiceUnit, KioskNotifiesReadyWatchdogAndStopping) {
+  const fs::path socket_path = dir_ / "notify.sock";
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  ASSERT_LT(socket_path.string().size(), sizeof(address.sun_path));
+  std::strncpy(address.sun_path, socket_path.c_str(), sizeof(address.sun_path) - 1);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)), 0);
+  // Drained while the kiosk runs, as systemd does: an AF_UNIX datagram
+  // socket queues only a few messages, and then the sender blocks.
+  std::vector<std::string> messages;
+  std::atomic<bool> done{false};
+  std::thread reader([&] {
+    char buffer[4096];
+    while (!done) {
+      pollfd poll_fd{fd, POLLIN, 0};
+      if (::poll(&poll_fd, 1, 20) <= 0) continue;
+      const ssize_t n = ::recv(fd, buffer, sizeof buffer, MSG_DONTWAIT);
+      if (n > 0) messages.emplace_back(buffer, static_cast<std::size_t>(n));
+    }
+    for (ssize_t n; (n = ::recv(fd, buffer, sizeof buffer, MSG_DONTWAIT)) > 0;)
+      messages.emplace_back(buffer, static_cast<std::size_t>(n));
+  });
+  ::setenv("NOTIFY_SOCKET", socket_path.c_str(), 1);
+  ::setenv("WATCHDOG_USEC", "100000", 1);  // 100 ms: pings at least every 50 ms
+  const testing::CommandResult result = run("run --frames 20 --save-every 0 --quiet --out " + (dir_ / "out").string());
+  ::unsetenv("NOTIFY_SOCKET");
+  ::unsetenv("WATCHDOG_USEC");
+  done = true;
+  reader.join();
+  ::close(fd);
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  int ready = 0, watchdog = 0, stopping = 0, first_ready = -1, first_watchdog = -1;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    if (messages[i].find("READY=1") != std::string::npos) {
+      ++ready;
+      if (first_ready < 0) first_ready = static_cast<int>(i);
+    }
+    if (messages[i].find("WATCHDOG=1") != std::string::npos) {
+      ++watchdog;
+      if (first_watchdog < 0) first_watchdog = static_cast<int>(i);
+    }
+    if (messages[i].find("STOPPING=1") != std::string::npos) ++stopping;
+  }
+  EXPECT_EQ(ready, 1);
+  // 20 frames take well over 50 ms on any machine.
+  EXPECT_GE(watchdog, 1);
+  EXPECT_LT(first_ready, first_watchdog) << "ready comes with the first frame shown, before any ping";
+  EXPECT_EQ(stopping, 1);
+  ASSERT_FALSE(messages.empty());
+  EXPECT_NE(messages.back().find("STOPPING=1"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace probelight
