@@ -76,6 +76,18 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.gpu_finish, defaults.gpu_finish);
 }
 
+// The board profiles load, and say what differs from the defaults.
+TEST(AppSettings, BoardProfilesLoad) {
+  const AppSettings pi = loadAppSettings(kBoardDir + "/raspberry-pi/probelight.yaml");
+  EXPECT_EQ(pi.state.dir, "/var/lib/probelight");
+  EXPECT_EQ(pi.button.gpio.chip, "gpiochip0");
+  EXPECT_EQ(pi.button.gpio.line, 17);
+  EXPECT_EQ(pi.save_every, 0);
+  const AppSettings desktop = loadAppSettings(kBoardDir + "/desktop-sim/probelight.yaml");
+  EXPECT_EQ(desktop.state.dir, "state");
+  EXPECT_EQ(desktop.sim.env, AppSettings{}.sim.env);
+}
+
 TEST(AppSettings, BoardCameraAndRigTemplatesLoad) {
   const CameraIntrinsics camera = config::loadCameraFile(kBoardDir + "/camera.yaml");
   EXPECT_GT(camera.fx_px, 0.0);
