@@ -18,6 +18,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "app/app_settings.hpp"
+#include "app/log_priority.hpp"
 #include "app/stage_settings.hpp"
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
@@ -595,7 +596,8 @@ class Analyzer {
     return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   }
   int say(int status, const std::string& message) {
-    log_ << "probelight: " << (render_ ? "render" : "analyze") << ": " << message << "\n";
+    log_ << logPrefix(status == 0 ? LogPriority::kInfo : LogPriority::kError) << "probelight: "
+         << (render_ ? "render" : "analyze") << ": " << message << "\n";
     return status;
   }
 

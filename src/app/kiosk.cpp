@@ -16,6 +16,7 @@
 #include "app/app_settings.hpp"
 #include "app/light_transition.hpp"
 #include "app/lighting_state_machine.hpp"
+#include "app/log_priority.hpp"
 #include "app/map_update_policy.hpp"
 #include "app/run_report.hpp"
 #include "app/service_notify.hpp"
@@ -258,7 +259,7 @@ class Kiosk {
       // A board without the GPIO chip (or a desktop) still runs the kiosk:
       // without a button, said once.
       if (options_.button != "gpio") return fail(2, error);
-      log_ << "probelight: warning: " << error << "; running without a button\n";
+      log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << error << "; running without a button\n";
       report_.extra["button_warning"] = error;
       button_ = std::make_unique<NoButton>();
     }
@@ -331,16 +332,16 @@ class Kiosk {
       if (wait == FrameWait::kTimeout) {
         // A camera that stops delivering: keep the last picture, say so, and
         // give up only after a long silence.
-        log_ << "probelight: no frame from " << source_->name() << " for 2 s\n";
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: no frame from " << source_->name() << " for 2 s\n";
         if (++consecutive_timeouts >= 15) {
-          log_ << "probelight: giving up: " << source_->name() << " delivered nothing for 30 s\n";
+          log_ << logPrefix(LogPriority::kError) << "probelight: giving up: " << source_->name() << " delivered nothing for 30 s\n";
           return 0;
         }
         continue;
       }
       if (wait == FrameWait::kEndOfStream) return 0;
       if (wait == FrameWait::kError) {
-        log_ << "probelight: " << source_->name() << ": " << source_->lastError() << "\n";
+        log_ << logPrefix(LogPriority::kError) << "probelight: " << source_->name() << ": " << source_->lastError() << "\n";
         return 0;
       }
       consecutive_timeouts = 0;
@@ -464,7 +465,7 @@ class Kiosk {
         break;
       case FrameOutcome::kCalibrationFailed:
         report_.count("calibrations_failed");
-        log_ << "probelight: frame " << frame_number << ": recalibration gave up (ball not seen in "
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: frame " << frame_number << ": recalibration gave up (ball not seen in "
              << machine_.policy().max_frames << " frames); previous lighting kept\n";
         break;
       case FrameOutcome::kNothing:
@@ -600,7 +601,7 @@ class Kiosk {
       if (saveLighting(inputs_.settings.state.dir, {dome, light, ibl::toString(config.dome.placement)}, save_error))
         report_.count("state_saves");
       else
-        log_ << "probelight: warning: lighting not saved: " << save_error << "\n";
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: lighting not saved: " << save_error << "\n";
     }
     nlohmann::json lights = nlohmann::json::array();
     for (const ibl::DomeLight& l : dome)
@@ -639,7 +640,7 @@ class Kiosk {
                << " lights)\n";
       } else if (!error.empty()) {
         state["error"] = error;
-        log_ << "probelight: warning: " << error << "; starting without stored lighting\n";
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << error << "; starting without stored lighting\n";
       }
     }
     report_.extra["state"] = state;
@@ -834,7 +835,7 @@ class Kiosk {
   }
   std::uint64_t frameLimit() const { return static_cast<std::uint64_t>(options_.frames); }
   int fail(int status, const std::string& message) {
-    log_ << "probelight: " << message << "\n";
+    log_ << logPrefix(LogPriority::kError) << "probelight: " << message << "\n";
     return status;
   }
 

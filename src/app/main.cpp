@@ -2,6 +2,7 @@
 // statuses (2: bad flags or configuration, 1: runtime failure, 3: analyze
 // found no tag or no ball).
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,7 @@
 #include "app/calibrate_camera.hpp"
 #include "app/command_line.hpp"
 #include "app/kiosk.hpp"
+#include "app/log_priority.hpp"
 
 int main(int argc, char** argv) {
   using namespace probelight;
@@ -23,6 +25,9 @@ int main(int argc, char** argv) {
   }
   const std::string command = args[0];
   args.erase(args.begin());
+  // Under systemd, stderr is the journal: every line gets its priority.
+  std::unique_ptr<JournalPrefixes> journal;
+  if (stderrIsJournal()) journal = std::make_unique<JournalPrefixes>(std::cerr);
   try {
     if (command == "run") return runKiosk(parseRunOptions(args), std::cerr);
     if (command == "analyze") return runAnalyze(parseAnalyzeOptions(args), std::cerr);
@@ -30,7 +35,7 @@ int main(int argc, char** argv) {
     if (command == "calibrate-camera") return runCalibrateCamera(parseCalibrateCameraOptions(args), std::cout, std::cerr);
     throw UsageError("unknown command '" + command + "' (see probelight --help)");
   } catch (const UsageError& error) {
-    std::cerr << "probelight: " << error.what() << "\n";
+    std::cerr << logPrefix(LogPriority::kError) << "probelight: " << error.what() << "\n";
     return 2;
   }
 }

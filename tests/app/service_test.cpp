@@ -3,6 +3,7 @@
 // NOTIFY_SOCKET: READY=1 after the first frame, the watchdog, STOPPING=1.
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -143,6 +144,38 @@ TEST_F(ServiceUnit, KioskNotifiesReadyWatchdogAndStopping) {
   EXPECT_EQ(stopping, 1);
   ASSERT_FALSE(messages.empty());
   EXPECT_NE(messages.back().find("STOPPING=1"), std::string::npos);
+}
+
+// Under systemd (JOURNAL_STREAM names stderr's device and inode) every line
+// carries its journald priority: a warning <4>, the rest <6>; a bad flag, an
+// error, <3>. Without it, lines stay plain.
+TEST_F(ServiceUnit, StderrLinesCarryJournalPrioritiesUnderSystemd) {
+  // The binary's stderr is this file (BinaryTest::run redirects it there).
+  const fs::path err = dir_ / "stderr.txt";
+  std::ofstream(err).close();
+  struct stat status {};
+  ASSERT_EQ(::stat(err.c_str(), &status), 0);
+  ::setenv("JOURNAL_STREAM", (std::to_string(status.st_dev) + ":" + std::to_string(status.st_ino)).c_str(), 1);
+  // BinaryTest::run writes stderr to dir_/stderr.txt with `2>`, which
+  // truncates the same inode: the identity holds.
+  const testing::CommandResult warned = run("run --frames 2 --save-every 0 --button gpio --out " + (dir_ / "out").string());
+  const testing::CommandResult bad = run("run --frames nope");
+  ::unsetenv("JOURNAL_STREAM");
+  ASSERT_EQ(warned.exit_status, 0) << warned.stderr_text;
+  std::istringstream lines(warned.stderr_text);
+  int warnings = 0, infos = 0;
+  for (std::string line; std::getline(lines, line);) {
+    ASSERT_TRUE(line.rfind("<4>", 0) == 0 || line.rfind("<6>", 0) == 0) << line;
+    warnings += line.rfind("<4>", 0) == 0 ? 1 : 0;
+    infos += line.rfind("<6>", 0) == 0 ? 1 : 0;
+  }
+  if (!fs::exists("/dev/gpiochip0")) EXPECT_EQ(warnings, 1) << warned.stderr_text;  // the missing button
+  EXPECT_GE(infos, 2);
+  EXPECT_EQ(bad.exit_status, 2);
+  EXPECT_EQ(bad.stderr_text.rfind("<3>probelight: ", 0), 0u) << bad.stderr_text;
+  // And plain without the journal.
+  const testing::CommandResult plain = run("run --frames nope");
+  EXPECT_EQ(plain.stderr_text.rfind("probelight: ", 0), 0u) << plain.stderr_text;
 }
 
 }  // namespace
