@@ -136,6 +136,16 @@ AppSettings loadAppSettings(const std::string& path) {
       button.readDouble("long_press_ms", gpio.debounce.long_press_ms, Range::closed(100.0, 60000.0));
   button.rejectUnknownFields();
 
+  ConfigReader display = file.section("display");
+  KmsDisplaySettings& kms = settings.display.kms;
+  kms.device = display.readString("device", kms.device);
+  kms.mode.connector = display.readString("connector", kms.mode.connector);
+  kms.mode.width_px = display.readInt("width", kms.mode.width_px, Range::closed(0, 16384));
+  kms.mode.height_px = display.readInt("height", kms.mode.height_px, Range::closed(0, 16384));
+  kms.mode.refresh_hz = display.readDouble("refresh_hz", kms.mode.refresh_hz, Range::closed(0.0, 1000.0));
+  if ((kms.mode.width_px == 0) != (kms.mode.height_px == 0)) display.fail("width", "width and height go together (both 0: the preferred mode)");
+  display.rejectUnknownFields();
+
   ConfigReader state = file.section("state");
   settings.state.dir = state.readString("dir", settings.state.dir);
   state.rejectUnknownFields();

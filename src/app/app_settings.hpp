@@ -8,6 +8,7 @@
 
 #include "app/lighting_state_machine.hpp"
 #include "app/map_update_policy.hpp"
+#include "display/kms_display.hpp"
 #include "ibl/light_dome.hpp"
 #include "input/gpio_button.hpp"
 #include "pipeline/environment_maps.hpp"
@@ -96,6 +97,11 @@ struct ButtonConfig {
   GpioButtonSettings gpio;  // chip, line, debounce and long press (--button gpio)
 };
 
+// The board's screen (--display kms).
+struct DisplayConfig {
+  KmsDisplaySettings kms;
+};
+
 // Where the kiosk keeps what must survive a restart (app/state_store.hpp).
 struct StateConfig {
   std::string dir;  // empty: nothing is kept (the desktop default; the board uses /var/lib/probelight)
@@ -111,6 +117,7 @@ struct AppSettings {
   LightsConfig lights;
   ButtonConfig button;
   StateConfig state;
+  DisplayConfig display;
   SimConfig sim;
   int save_every = 1;     // write every K-th composited frame; 0 = none
   bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)

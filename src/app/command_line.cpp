@@ -70,7 +70,7 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
   const std::map<std::string, FlagSetter> valued = {
       {"--source", [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images"}); options.source = v; }},
       {"--images", [&](auto&, auto& v) { options.images = v; }},
-      {"--display", [&](auto& f, auto& v) { requireChoice(f, v, {"headless"}); options.display = v; }},
+      {"--display", [&](auto& f, auto& v) { requireChoice(f, v, {"headless", "kms"}); options.display = v; }},
       {"--button", [&](auto& f, auto& v) { requireChoice(f, v, {"none", "key", "gpio"}); options.button = v; }},
       {"--key-input", [&](auto&, auto& v) { options.key_path = v; }},
       {"--frames", [&](auto& f, auto& v) { options.frames = parseInteger(f, v, 0); }},
@@ -256,7 +256,8 @@ run flags:
   --camera camera.yaml         camera calibration (sim: overrides the simulated camera)
   --rig rig.yaml               tag and mirror-ball geometry (sim: overrides the simulated rig)
   --config probelight.yaml     pipeline settings (see board/probelight.yaml)
-  --display headless           headless EGL on Mesa, frames written as PNG
+  --display headless|kms       headless EGL on Mesa, frames written as PNG; or fullscreen on the
+                               board's screen through DRM/KMS (probelight.yaml's display section)
   --button none|key|gpio       recalibration button (key: lines on stdin or a FIFO; gpio: the board's
                                button, probelight.yaml's button section)
   --key-input PATH             where --button key reads ('-' = stdin, default)

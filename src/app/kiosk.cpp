@@ -308,7 +308,7 @@ class Kiosk {
     const AppSettings& settings = inputs_.settings;
     const CameraIntrinsics& camera = inputs_.camera;
     std::string error;
-    display_ = makeDisplay(options_.display, options_.out_dir, settings.save_every, error);
+    display_ = makeDisplay(options_.display, options_.out_dir, settings.save_every, settings.display.kms, error);
     if (!display_ || !display_->open(camera.width_px, camera.height_px, error)) return fail(1, error);
     capabilities_ = gles::probeCapabilities();
     if (settings.maps.force_8bit) capabilities_ = capabilities_.withoutExtensions();

@@ -65,7 +65,10 @@ class HeadlessDisplay final : public Display {
   std::filesystem::path last_kept_path_;
 };
 
+struct KmsDisplaySettings;
+
+// "headless" (out_dir, save_every) or "kms" (the board's screen, `kms`).
 std::unique_ptr<Display> makeDisplay(const std::string& kind, const std::filesystem::path& out_dir, int save_every,
-                                     std::string& error);
+                                     const KmsDisplaySettings& kms, std::string& error);
 
 }  // namespace probelight

@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "display/display.hpp"
+#include "display/kms_display.hpp"
 #include "gles/egl_context.hpp"
 #include "gles/render_target.hpp"
 
@@ -69,9 +70,10 @@ std::string HeadlessDisplay::describe() const {
 }
 
 std::unique_ptr<Display> makeDisplay(const std::string& kind, const std::filesystem::path& out_dir, int save_every,
-                                     std::string& error) {
+                                     const KmsDisplaySettings& kms, std::string& error) {
   if (kind == "headless") return std::make_unique<HeadlessDisplay>(out_dir, save_every);
-  error = "unknown display '" + kind + "' (choose headless)";
+  if (kind == "kms") return std::make_unique<KmsDisplay>(kms);
+  error = "unknown display '" + kind + "' (choose headless or kms)";
   return nullptr;
 }
 

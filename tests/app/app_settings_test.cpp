@@ -69,6 +69,10 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_DOUBLE_EQ(from_file.button.gpio.debounce.debounce_ms, defaults.button.gpio.debounce.debounce_ms);
   EXPECT_DOUBLE_EQ(from_file.button.gpio.debounce.long_press_ms, defaults.button.gpio.debounce.long_press_ms);
   EXPECT_EQ(from_file.state.dir, defaults.state.dir);
+  EXPECT_EQ(from_file.display.kms.device, defaults.display.kms.device);
+  EXPECT_EQ(from_file.display.kms.mode.connector, defaults.display.kms.mode.connector);
+  EXPECT_EQ(from_file.display.kms.mode.width_px, defaults.display.kms.mode.width_px);
+  EXPECT_DOUBLE_EQ(from_file.display.kms.mode.refresh_hz, defaults.display.kms.mode.refresh_hz);
   EXPECT_EQ(from_file.probe_refinement.enabled, defaults.probe_refinement.enabled);
   EXPECT_DOUBLE_EQ(from_file.probe_refinement.weight, defaults.probe_refinement.weight);
   EXPECT_EQ(from_file.sim.ball_offset_m, defaults.sim.ball_offset_m);

@@ -274,7 +274,7 @@ std::vector<BadField> badFields() {
       {"sim", "sun_azimuth_rate_deg_per_frame"}, {"probe_refinement", "weight"},
       {"lights", "fade_s"},                      {"lights", "max_shadow_reach"},
       {"lights", "refit_change_fraction"},      {"button", "debounce_ms"},
-      {"button", "long_press_ms"}};
+      {"button", "long_press_ms"},              {"display", "refresh_hz"}};
   for (const auto& [section, name] : app_scalars)
     out.push_back({"probelight", section + ":\n  " + name + ": VALUE\n", section + "." + name});
   for (const std::string name : {"static_cutoff_hz", "max_lag_px", "speed_cutoff_hz", "reset_jump_px"})
@@ -321,7 +321,7 @@ std::vector<BadField> badFields() {
 
 TEST_F(Stress, NanOrInfInAnyFloatFieldIsOneLineAndExit2) {
   const std::vector<BadField> fields = badFields();
-  ASSERT_EQ(fields.size(), 21u + 4u + 3u + 6u + 14u + 6u);
+  ASSERT_EQ(fields.size(), 22u + 4u + 3u + 6u + 14u + 6u);
   for (const BadField& bad : fields) {
     for (const char* value : {".nan", ".inf", "-.inf"}) {
       std::string yaml = bad.yaml;
