@@ -136,6 +136,10 @@ AppSettings loadAppSettings(const std::string& path) {
       button.readDouble("long_press_ms", gpio.debounce.long_press_ms, Range::closed(100.0, 60000.0));
   button.rejectUnknownFields();
 
+  ConfigReader camera_section = file.section("camera");
+  settings.camera.id = camera_section.readString("id", settings.camera.id);
+  camera_section.rejectUnknownFields();
+
   ConfigReader display = file.section("display");
   KmsDisplaySettings& kms = settings.display.kms;
   kms.device = display.readString("device", kms.device);

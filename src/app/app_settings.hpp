@@ -97,6 +97,11 @@ struct ButtonConfig {
   GpioButtonSettings gpio;  // chip, line, debounce and long press (--button gpio)
 };
 
+// The board's camera (--source libcamera); its size is camera.yaml's.
+struct CameraConfig {
+  std::string id;  // libcamera's camera id; empty: the first camera
+};
+
 // The board's screen (--display kms).
 struct DisplayConfig {
   KmsDisplaySettings kms;
@@ -118,6 +123,7 @@ struct AppSettings {
   ButtonConfig button;
   StateConfig state;
   DisplayConfig display;
+  CameraConfig camera;
   SimConfig sim;
   int save_every = 1;     // write every K-th composited frame; 0 = none
   bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)

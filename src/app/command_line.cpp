@@ -68,7 +68,7 @@ void parseFlags(const std::vector<std::string>& args, const std::map<std::string
 RunOptions parseRunOptions(const std::vector<std::string>& args) {
   RunOptions options;
   const std::map<std::string, FlagSetter> valued = {
-      {"--source", [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images"}); options.source = v; }},
+      {"--source", [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images", "libcamera"}); options.source = v; }},
       {"--images", [&](auto&, auto& v) { options.images = v; }},
       {"--display", [&](auto& f, auto& v) { requireChoice(f, v, {"headless", "kms"}); options.display = v; }},
       {"--button", [&](auto& f, auto& v) { requireChoice(f, v, {"none", "key", "gpio"}); options.button = v; }},
@@ -89,6 +89,10 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
     throw UsageError("flag --source images needs --camera camera.yaml (the calibration of the camera that took them)");
   if (options.source == "images" && options.rig_path.empty())
     throw UsageError("flag --source images needs --rig rig.yaml");
+  if (options.source == "libcamera" && options.camera_path.empty())
+    throw UsageError("flag --source libcamera needs --camera camera.yaml (its calibration, at the size to stream)");
+  if (options.source == "libcamera" && options.rig_path.empty())
+    throw UsageError("flag --source libcamera needs --rig rig.yaml");
   return options;
 }
 
@@ -251,7 +255,8 @@ usage:
   probelight --help | --version
 
 run flags:
-  --source sim|images          frame source (default sim: the simulated world)
+  --source sim|images|libcamera
+                               frame source (default sim: the simulated world; libcamera: the camera)
   --images FOLDER_OR_GLOB      files to replay with --source images
   --camera camera.yaml         camera calibration (sim: overrides the simulated camera)
   --rig rig.yaml               tag and mirror-ball geometry (sim: overrides the simulated rig)

@@ -23,6 +23,7 @@
 #include "app/stage_settings.hpp"
 #include "app/state_store.hpp"
 #include "capture/image_frame_source.hpp"
+#include "capture/libcamera_source.hpp"
 #include "capture/sim_frame_source.hpp"
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
@@ -275,8 +276,16 @@ class Kiosk {
 
   int makeSource() {
     const AppSettings& settings = inputs_.settings;
-    if (options_.source != "sim") {
+    if (options_.source == "images") {
       source_ = std::make_unique<ImageFrameSource>(options_.images);
+      return 0;
+    }
+    if (options_.source == "libcamera") {
+      LibcameraSettings camera;
+      camera.camera_id = settings.camera.id;
+      camera.width_px = inputs_.camera.width_px;  // the calibrated size
+      camera.height_px = inputs_.camera.height_px;
+      source_ = std::make_unique<LibcameraSource>(camera);
       return 0;
     }
     sim::SceneConfig scene = sim::defaultScene();

@@ -70,6 +70,7 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_DOUBLE_EQ(from_file.button.gpio.debounce.long_press_ms, defaults.button.gpio.debounce.long_press_ms);
   EXPECT_EQ(from_file.state.dir, defaults.state.dir);
   EXPECT_EQ(from_file.display.kms.device, defaults.display.kms.device);
+  EXPECT_EQ(from_file.camera.id, defaults.camera.id);
   EXPECT_EQ(from_file.display.kms.mode.connector, defaults.display.kms.mode.connector);
   EXPECT_EQ(from_file.display.kms.mode.width_px, defaults.display.kms.mode.width_px);
   EXPECT_DOUBLE_EQ(from_file.display.kms.mode.refresh_hz, defaults.display.kms.mode.refresh_hz);
