@@ -27,7 +27,9 @@
 #include <benchmark/benchmark.h>
 #include <glm/glm.hpp>
 
+#include "capture/frame_source.hpp"
 #include "core/types.hpp"
+#include "core/ycbcr.hpp"
 #include "gles/capabilities.hpp"
 #include "gles/egl_context.hpp"
 #include "gles/render_target.hpp"
@@ -45,6 +47,7 @@
 #include "pipeline/environment_maps.hpp"
 #include "pipeline/ground_shadow.hpp"
 #include "pipeline/object_compositor.hpp"
+#include "sim/camera_ycbcr.hpp"
 #include "sim/occluder.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
@@ -116,7 +119,7 @@ Setup& setup() {
       Frame frame;
       frame.index = index;
       s->world->render(index, frame.rgb, frame.truth);
-      tracking::rgbToLuma(frame.rgb, frame.luma);
+      lumaFromRgb(frame.rgb, frame.luma);
       frame.view = ibl::MirrorBallView{s->scene.camera, frame.truth.pose, s->scene.rig.probe_center_w,
                                        s->scene.rig.probe_radius_m};
       frame.to_camera_w = glm::normalize(frame.truth.pose.cameraCenterWorld() - s->scene.rig.probe_center_w);
@@ -130,7 +133,7 @@ Setup& setup() {
       Frame frame;
       frame.index = index;
       s->world->render(index, frame.rgb, frame.truth);
-      tracking::rgbToLuma(frame.rgb, frame.luma);
+      lumaFromRgb(frame.rgb, frame.luma);
       s->consecutive_frames.push_back(std::move(frame));
     }
     std::fprintf(stderr, "setup: env %s, exposure %.4f (camera linear = radiance x exposure, clipped at 1)\n",
@@ -745,6 +748,49 @@ void uploadFrame(benchmark::State& state) {
   }
 }
 
+// The board camera's I420 frames: three planes uploaded and converted on
+// the GPU (the path when dmabuf import is not available; llvmpipe has none).
+void uploadI420Frame(benchmark::State& state) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  std::vector<FrameBuffer> frames(s.frames.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const ImageRGB8& rgb = s.frames[i].rgb;
+    YuvPlanes& planes = frames[i].allocateI420(rgb.width, rgb.height, YcbcrEncoding{YcbcrMatrix::kRec601, true});
+    sim::encodeI420Sycc(rgb, const_cast<std::uint8_t*>(planes.data[0]), planes.stride_bytes[0],
+                        const_cast<std::uint8_t*>(planes.data[1]), const_cast<std::uint8_t*>(planes.data[2]),
+                        planes.stride_bytes[1]);
+  }
+  pipeline::CameraFrameTexture texture;
+  std::string error;
+  if (!texture.init(s.capabilities_full, error) || !texture.upload(frames[0], error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  size_t next = 0;
+  for (auto _ : state) {
+    if (!texture.upload(frames[next], error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    glFinish();
+    next = (next + 1) % frames.size();
+  }
+}
+
+// The luma an RGB source computes for tag detection; a camera's Y' plane
+// needs none of it.
+void lumaFromRgbFrame(benchmark::State& state) {
+  Setup& s = setup();
+  std::vector<std::uint8_t> luma;
+  size_t next = 0;
+  for (auto _ : state) {
+    lumaFromRgb(s.frames[next].rgb, luma);
+    benchmark::DoNotOptimize(luma.data());
+    next = (next + 1) % s.frames.size();
+  }
+}
+
 // ---------------------------------------------------------------------------
 // 5. CPU references
 
@@ -821,6 +867,10 @@ void registerAll() {
             ->MinTime(kMinTime);
 
   benchmark::RegisterBenchmark("upload/640x480", uploadFrame)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("upload/640x480/i420", uploadI420Frame)
+      ->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("luma_from_rgb/640x480", lumaFromRgbFrame)
+      ->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
 
   for (bool eight_bit : {false, true})
     for (int face : {32, 64, 128})

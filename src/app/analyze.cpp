@@ -238,7 +238,7 @@ class Analyzer {
     for (int run = 0; run < 2; ++run) {
       tracker_->resetHistory();
       const auto start = Clock::now();
-      tracking::rgbToLuma(frame_rgb_, luma);
+      lumaFromRgb(frame_rgb_, luma);
       track_ = tracker_->track(luma.data(), frame_rgb_.width, frame_rgb_.height, frame_rgb_.width);
       timings_[run]["detect_pose"] = msSince(start);
     }
@@ -310,7 +310,7 @@ class Analyzer {
   // ball is from where the frame shows it (and where in W it would be).
   Json edgeFitJson() {
     std::vector<std::uint8_t> luma;
-    tracking::rgbToLuma(frame_rgb_, luma);
+    lumaFromRgb(frame_rgb_, luma);
     const tracking::ProbeEdgeFit fit =
         tracking::fitProbeOutlineToEdges(luma.data(), frame_rgb_.width, frame_rgb_.height, frame_rgb_.width, outline_,
                                          rig_.probe_reflectance, settings_.maps.stages.camera_transfer);

@@ -134,10 +134,21 @@ AppSettings loadAppSettings(const std::string& path) {
   gpio.debounce.debounce_ms = button.readDouble("debounce_ms", gpio.debounce.debounce_ms, Range::closed(0.0, 1000.0));
   gpio.debounce.long_press_ms =
       button.readDouble("long_press_ms", gpio.debounce.long_press_ms, Range::closed(100.0, 60000.0));
+  settings.button.led.chip = gpio.chip;
+  settings.button.led.line = button.readInt("led_line", settings.button.led.line, Range::closed(-1, 1023));
+  settings.button.led.active_low = button.readBool("led_active_low", settings.button.led.active_low);
+  if (settings.button.led.line >= 0 && settings.button.led.line == gpio.line)
+    throw config::ConfigError(button.path() + ": field '" + button.fieldName("led_line") + "': the LED cannot share the button's line " +
+                      std::to_string(gpio.line));
   button.rejectUnknownFields();
 
   ConfigReader camera_section = file.section("camera");
   settings.camera.id = camera_section.readString("id", settings.camera.id);
+  settings.camera.lock_exposure = camera_section.readBool("lock_exposure", settings.camera.lock_exposure);
+  settings.camera.exposure_settle_frames =
+      camera_section.readInt("exposure_settle_frames", settings.camera.exposure_settle_frames, Range::closed(0, 10000));
+  settings.camera.reconnect_max_interval_s = camera_section.readDouble(
+      "reconnect_max_interval_s", settings.camera.reconnect_max_interval_s, Range::closed(0.5, 3600.0));
   camera_section.rejectUnknownFields();
 
   ConfigReader display = file.section("display");
@@ -170,6 +181,11 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.lamp_on_frame = sim.readInt("lamp_on_frame", settings.sim.lamp_on_frame, Range::atLeast(-1));
   settings.sim.lamp_off_frame = sim.readInt("lamp_off_frame", settings.sim.lamp_off_frame, Range::atLeast(-1));
   settings.sim.ball_offset_m = sim.readVec3("ball_offset", settings.sim.ball_offset_m, Range::closed(-0.1, 0.1));
+  settings.sim.pixel_format = sim.readString("pixel_format", settings.sim.pixel_format, {"rgb", "yuv420"});
+  settings.sim.camera_lost_at_frame =
+      sim.readInt("camera_lost_at_frame", settings.sim.camera_lost_at_frame, Range::atLeast(-1));
+  settings.sim.camera_lost_restarts =
+      sim.readInt("camera_lost_restarts", settings.sim.camera_lost_restarts, Range::closed(0, 1000));
   sim.rejectUnknownFields();
 
   ConfigReader output = file.section("output");

@@ -11,6 +11,7 @@
 #include "display/kms_display.hpp"
 #include "ibl/light_dome.hpp"
 #include "input/gpio_button.hpp"
+#include "input/status_led.hpp"
 #include "pipeline/environment_maps.hpp"
 #include "tracking/pose_smoother.hpp"
 
@@ -91,15 +92,33 @@ struct SimConfig {
   // Where the simulated ball really sits relative to rig.yaml's probe_center
   // (metres, W): a rig measured wrong, for testing probe_refinement.
   glm::dvec3 ball_offset_m{0.0};
+  // "rgb", or "yuv420": frames come as the board's camera gives them (I420,
+  // full-range Rec601), so the Y'-plane detection and the GPU YUV conversion
+  // run as on the board.
+  std::string pixel_format = "rgb";
+  // The camera disappearing mid-run (for testing the reconnect): frame N
+  // fails, then the first `camera_lost_restarts` reconnects fail too.
+  int camera_lost_at_frame = -1;  // -1: never
+  int camera_lost_restarts = 2;
 };
 
 struct ButtonConfig {
   GpioButtonSettings gpio;  // chip, line, debounce and long press (--button gpio)
+  StatusLedSettings led;    // on the button's chip; line -1: none
 };
 
 // The board's camera (--source libcamera); its size is camera.yaml's.
 struct CameraConfig {
   std::string id;  // libcamera's camera id; empty: the first camera
+  // Freeze auto exposure and white balance while the lights are fitted, so
+  // that every frame of a recalibration sees the ball alike. Not during the
+  // first `exposure_settle_frames` after the camera starts (AE is still
+  // converging: locking then would keep a wrong exposure).
+  bool lock_exposure = true;
+  int exposure_settle_frames = 30;
+  // A camera that disappears is re-opened after 0.5 s, then after twice as
+  // long each time it fails, up to this.
+  double reconnect_max_interval_s = 30.0;
 };
 
 // The board's screen (--display kms).

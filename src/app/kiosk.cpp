@@ -9,6 +9,7 @@
 #include <iostream>
 #include <map>
 #include <sstream>
+#include <thread>
 
 #include <GLES2/gl2.h>
 #include <opencv2/imgproc.hpp>
@@ -19,6 +20,7 @@
 #include "app/log_priority.hpp"
 #include "app/map_update_policy.hpp"
 #include "app/run_report.hpp"
+#include "app/reconnect_backoff.hpp"
 #include "app/service_notify.hpp"
 #include "app/stage_settings.hpp"
 #include "app/state_store.hpp"
@@ -36,6 +38,7 @@
 #include "ibl/probe_outline.hpp"
 #include "ibl/spherical_harmonics.hpp"
 #include "input/button_source.hpp"
+#include "input/status_led.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
 #include "pipeline/ground_shadow.hpp"
@@ -264,6 +267,17 @@ class Kiosk {
       report_.extra["button_warning"] = error;
       button_ = std::make_unique<NoButton>();
     }
+    status_led_ = std::make_unique<NoStatusLed>();
+    if (settings.button.led.line >= 0) {
+      auto led = std::make_unique<GpioStatusLed>(settings.button.led);
+      if (led->start(error)) {
+        status_led_ = std::move(led);
+      } else {
+        // A hint for the user, never a reason not to run: said once.
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << error << "; running without it\n";
+        report_.extra["status_led_warning"] = error;
+      }
+    }
     if (!source_->start(error)) return fail(options_.source == "images" ? 2 : 1, error);
 
     material_ = objectMaterial(settings);
@@ -271,6 +285,7 @@ class Kiosk {
     loadStoredLighting();
     machine_ = LightingStateMachine(settings.recalibration);
     map_policy_ = MapUpdatePolicy(settings.map_updates);
+    reconnect_ = ReconnectBackoff(0.5, settings.camera.reconnect_max_interval_s);
     return 0;
   }
 
@@ -309,7 +324,11 @@ class Kiosk {
     } catch (const sim::SceneError& error) {
       return fail(2, error.what());
     }
-    source_ = std::make_unique<SimFrameSource>(world_, frameLimit());
+    SimCameraOptions camera_options;
+    camera_options.layout = settings.sim.pixel_format == "yuv420" ? PixelLayout::kI420 : PixelLayout::kRgb8;
+    camera_options.lost_at_frame = settings.sim.camera_lost_at_frame;
+    camera_options.failed_restarts = settings.sim.camera_lost_restarts;
+    source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), 3, camera_options);
     return 0;
   }
 
@@ -336,13 +355,22 @@ class Kiosk {
     int consecutive_timeouts = 0;
     while (frameLimit() == 0 || frames_done_ < frameLimit()) {
       pollButton();
+      status_led_->set(ledLitAt(ledPatternFor(machine_.state() == AppState::kRecalibrating, reconnect_.lost()),
+                                monotonicNowS()));
+      if (reconnect_.lost()) {
+        if (const int status = whileCameraLost(); status != 0) return status;
+        continue;
+      }
       FrameLease lease;
       const FrameWait wait = source_->waitFrame(std::chrono::milliseconds(2000), lease);
       if (wait == FrameWait::kTimeout) {
         // A camera that stops delivering: keep the last picture, say so, and
-        // give up only after a long silence.
+        // after a long silence treat it as gone (re-open it).
         log_ << logPrefix(LogPriority::kWarning) << "probelight: no frame from " << source_->name() << " for 2 s\n";
-        if (++consecutive_timeouts >= 15) {
+        if (++consecutive_timeouts >= kTimeoutsBeforeReconnect && canReconnect()) {
+          consecutive_timeouts = 0;
+          cameraLost("no frame for " + std::to_string(2 * kTimeoutsBeforeReconnect) + " s");
+        } else if (consecutive_timeouts >= 15) {
           log_ << logPrefix(LogPriority::kError) << "probelight: giving up: " << source_->name() << " delivered nothing for 30 s\n";
           return 0;
         }
@@ -350,13 +378,91 @@ class Kiosk {
       }
       if (wait == FrameWait::kEndOfStream) return 0;
       if (wait == FrameWait::kError) {
+        if (canReconnect()) {
+          cameraLost(source_->lastError());
+          continue;
+        }
         log_ << logPrefix(LogPriority::kError) << "probelight: " << source_->name() << ": " << source_->lastError() << "\n";
         return 0;
       }
       consecutive_timeouts = 0;
+      ++frames_since_camera_start_;
+      recordExposure(lease->metadata);
       if (const int status = processFrame(*lease, frames_done_++); status != 0) return status;
     }
     return 0;
+  }
+
+  // Cameras come back; a folder of images that failed does not.
+  bool canReconnect() const { return options_.source != "images"; }
+
+  double monotonicNowS() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  }
+
+  void cameraLost(const std::string& why) {
+    report_.count("camera_losses");
+    last_camera_problem_ = why;
+    log_ << logPrefix(LogPriority::kError) << "probelight: " << source_->name() << ": " << why
+         << "; keeping the last frame and reconnecting\n";
+    source_->stop();
+    exposure_locked_ = false;  // a new stream starts with AE running
+    reconnect_.onLost(monotonicNowS());
+  }
+
+  // The last frame stays on screen with a message (and the watchdog keeps
+  // being fed: the service is healthy, the camera is not) until a reconnect
+  // attempt, when due, succeeds.
+  int whileCameraLost() {
+    const double now_s = monotonicNowS();
+    if (reconnect_.due(now_s)) {
+      std::string error;
+      if (source_->start(error)) {
+        report_.count("camera_reconnects");
+        log_ << logPrefix(LogPriority::kInfo) << "probelight: " << source_->name() << " is back after "
+             << reconnect_.failedAttempts() + 1 << " attempt(s), " << std::fixed << std::setprecision(1)
+             << now_s - reconnect_.lostSinceS() << " s\n";
+        reconnect_.onReconnected();
+        frames_since_camera_start_ = 0;
+        return 0;
+      }
+      report_.count("camera_reconnect_failures");
+      last_camera_problem_ = error;
+      reconnect_.onAttemptFailed(now_s);
+      log_ << logPrefix(LogPriority::kWarning) << "probelight: reconnect failed: " << error << "; next attempt in "
+           << std::fixed << std::setprecision(1) << reconnect_.nextAttemptS() - now_s << " s\n";
+    }
+    const double wait_s = std::max(0.0, reconnect_.nextAttemptS() - monotonicNowS());
+    const std::string status = "Camera lost: reconnecting" +
+                               (wait_s > 0.95 ? " in " + std::to_string(static_cast<int>(wait_s + 0.5)) + " s" : "");
+    if (!frame_texture_.empty()) {
+      // Not logged: the loss and each attempt are, the countdown is not.
+      if (const int failed = renderAndPresent(last_track_, status, last_frame_number_, false); failed != 0) return failed;
+    } else {
+      notifier_.frameShown();  // nothing to show yet; the service itself is alive
+    }
+    // A few redraws a second are plenty for a still picture.
+    std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<int>(1000.0 * std::min(0.2, wait_s)) + 1));
+    return 0;
+  }
+
+  // Exposure time and gain of every frame (the ball's brightness follows
+  // them), and AE/AWB frozen while the lights are fitted.
+  void recordExposure(const FrameMetadata& metadata) {
+    if (metadata.exposure_us > 0.0) exposure_us_.add(metadata.exposure_us);
+    if (metadata.analogue_gain > 0.0) analogue_gain_.add(metadata.analogue_gain);
+    last_exposure_us_ = metadata.exposure_us;
+    last_analogue_gain_ = metadata.analogue_gain;
+  }
+
+  void syncExposureLock() {
+    const CameraConfig& config = inputs_.settings.camera;
+    const bool want = config.lock_exposure && machine_.state() == AppState::kRecalibrating &&
+                      frames_since_camera_start_ > static_cast<std::uint64_t>(config.exposure_settle_frames);
+    if (want == exposure_locked_) return;
+    if (!source_->lockExposure(want)) return;  // no such controls: nothing to say
+    exposure_locked_ = want;
+    report_.count(want ? "exposure_locks" : "exposure_unlocks");
   }
 
   void pollButton() {
@@ -390,18 +496,18 @@ class Kiosk {
   int processFrame(const FrameBuffer& frame, std::uint64_t frame_number) {
     const CameraIntrinsics& camera = inputs_.camera;
     const RigGeometry& rig = inputs_.rig;
-    if (frame.rgb.width != camera.width_px || frame.rgb.height != camera.height_px) {
+    if (frame.width_px != camera.width_px || frame.height_px != camera.height_px) {
       // The calibration belongs to another resolution: using it would put the
       // object and the ball in the wrong place. Skip the frame, keep the state.
       report_.count("frames_wrong_size");
-      log_ << "probelight: " << frame.metadata.origin << ": frame is " << frame.rgb.width << "x" << frame.rgb.height
+      log_ << "probelight: " << frame.metadata.origin << ": frame is " << frame.width_px << "x" << frame.height_px
            << " but the camera calibration is " << camera.width_px << "x" << camera.height_px << "; frame skipped\n";
       return 0;
     }
     std::string error;
     {
       StageTimer timer(report_, "upload");
-      if (!frame_texture_.upload(frame.rgb, error)) return fail(1, frame.metadata.origin + ": " + error);
+      if (!frame_texture_.upload(frame, error)) return fail(1, frame.metadata.origin + ": " + error);
       gpuDone();
     }
 
@@ -409,8 +515,9 @@ class Kiosk {
     tracking::TagTrackResult track;
     {
       StageTimer timer(report_, "detect_pose");
-      tracking::rgbToLuma(frame.rgb, luma_);
-      track = tracker_->track(luma_.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
+      // The Y' plane of a camera frame in place, or the luma the source made.
+      const LumaView luma = frame.luma();
+      track = tracker_->track(luma.data, luma.width, luma.height, luma.stride);
     }
     // Everything downstream (ball crop, maps, object) uses the smoothed pose.
     std::optional<ibl::MirrorBallView> unsmoothed_view;
@@ -439,13 +546,13 @@ class Kiosk {
                            {"message", track.status}};
     } else {
       outline = ibl::computeProbeOutline(view);
-      refineProbe(view, outline);
+      refineProbe(view, outline, frame.luma());
     }
     MapFrameInput policy_input;
     policy_input.tag_found = track.found;
     policy_input.outline = outline;
     policy_input.rotation_cam_from_world = track.pose.R_cam_from_world;
-    policy_input.luma = LumaView{luma_.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width};
+    policy_input.luma = frame.luma();
     const MapUpdateDecision decision = map_policy_.decide(policy_input);
     recordDecision(decision);
     if (decision.skip == MapSkipReason::kBallNotInView)
@@ -480,6 +587,7 @@ class Kiosk {
       case FrameOutcome::kNothing:
         break;
     }
+    syncExposureLock();
     if (machine_.state() == AppState::kRecalibrating) {
       status = "Recalibrating lights (" + std::to_string(machine_.goodFramesSoFar()) + "/" +
                std::to_string(machine_.policy().good_frames_needed) + ")" + (status.empty() ? "" : ": " + status);
@@ -488,6 +596,8 @@ class Kiosk {
 
     if (const int failed = updateShadows(); failed != 0) return failed;
     if (const int failed = renderAndPresent(track, status, frame_number); failed != 0) return failed;
+    last_track_ = track;
+    last_frame_number_ = frame_number;
 
     if (frame.metadata.truth) {
       // How far the ball really moved since the previous frame: separates
@@ -604,6 +714,9 @@ class Kiosk {
     lighting_.highlight_direction_w = glm::vec3(light.direction_w);
     lighting_.highlight_rgb = glm::vec3(light.rgb);
     report_.count("calibrations_completed");
+    // The ball's brightness in the fit follows these (0: the source cannot say).
+    exposure_at_last_fit_ = {{"frame", frame_number}, {"exposure_us", last_exposure_us_},
+                             {"analogue_gain", last_analogue_gain_}, {"locked", exposure_locked_}};
     if (!inputs_.settings.state.dir.empty()) {
       // Kept for the next start; a failed write leaves the old file whole.
       std::string save_error;
@@ -722,7 +835,8 @@ class Kiosk {
     return 0;
   }
 
-  int renderAndPresent(const tracking::TagTrackResult& track, const std::string& status, std::uint64_t frame_number) {
+  int renderAndPresent(const tracking::TagTrackResult& track, const std::string& status, std::uint64_t frame_number,
+                       bool log_status_change = true) {
     const CameraIntrinsics& camera = inputs_.camera;
     std::string error;
     {
@@ -744,7 +858,7 @@ class Kiosk {
       gpuDone();
     }
     if (!status.empty()) report_.count("frames_with_status");
-    if (status != last_logged_status_ && !options_.quiet) {
+    if (log_status_change && status != last_logged_status_ && !options_.quiet) {
       log_ << "probelight: frame " << frame_number << ": " << (status.empty() ? "tracking" : status) << "\n";
       last_logged_status_ = status;
     }
@@ -777,6 +891,7 @@ class Kiosk {
     // Frames per tracking status, and the last frame the tag was not usable.
     report_.extra["tag_status"] = {{"frames", tag_status_frames_}, {"last_problem", last_tag_problem_}};
     report_.extra["probe_refinement"] = probeRefinementJson();
+    report_.extra["camera"] = cameraJson();
     // Shadow maps are made only when the lights (fading after a fit) or the
     // object change: passes run and skipped (a skipped pass is a light whose
     // map from an earlier frame still holds), and the last frame that made any.
@@ -800,14 +915,14 @@ class Kiosk {
   // probe_refinement: fits this frame's ball outline to the image and moves
   // the rig correction toward what the fit implies (tracking/probe_edge_fit.hpp).
   // Only on a ball fully in view and big enough to be worth a map.
-  void refineProbe(const ibl::MirrorBallView& view, const ibl::ProbeOutline& outline) {
+  void refineProbe(const ibl::MirrorBallView& view, const ibl::ProbeOutline& outline, const LumaView& luma) {
     const ProbeRefinementConfig& config = inputs_.settings.probe_refinement;
     if (!config.enabled || !outline.valid || !outline.fully_in_image ||
         outline.radius_px < inputs_.settings.map_updates.min_probe_radius_px)
       return;
     StageTimer timer(report_, "probe_refine");
     const tracking::ProbeEdgeFit fit = tracking::fitProbeOutlineToEdges(
-        luma_.data(), view.camera.width_px, view.camera.height_px, view.camera.width_px, outline,
+        luma.data, luma.width, luma.height, luma.stride, outline,
         inputs_.rig.probe_reflectance, inputs_.settings.maps.stages.camera_transfer);
     if (!fit.ok) {
       ++probe_fits_refused_;
@@ -819,6 +934,20 @@ class Kiosk {
     const glm::dvec3 implied = tracking::probeCenterForImageShift(view.pose, view.camera, view.center_w, fit.shift_px);
     probe_center_offset_w_ += config.weight * (implied - view.center_w);
     probe_radius_scale_ *= 1.0 + config.weight * (fit.radius_scale - 1.0);
+  }
+
+  nlohmann::json cameraJson() const {
+    nlohmann::json out = {{"frame_upload", pipeline::toString(frame_texture_.lastPath())},
+                           {"losses", report_.counter("camera_losses")},
+                           {"reconnects", report_.counter("camera_reconnects")},
+                           {"reconnect_failures", report_.counter("camera_reconnect_failures")},
+                           {"exposure_locks", report_.counter("exposure_locks")},
+                           {"exposure_at_last_fit", exposure_at_last_fit_}};
+    if (!frame_texture_.dmabufImportProblem().empty()) out["dmabuf_import_problem"] = frame_texture_.dmabufImportProblem();
+    if (!last_camera_problem_.empty()) out["last_problem"] = last_camera_problem_;
+    recordSeries(out, "exposure_us", exposure_us_);
+    recordSeries(out, "analogue_gain", analogue_gain_);
+    return out;
   }
 
   nlohmann::json probeRefinementJson() const {
@@ -880,6 +1009,7 @@ class Kiosk {
   SampleSeries probe_fit_shift_px_;
   std::string probe_fit_last_refusal_;
   std::unique_ptr<ButtonSource> button_;
+  std::unique_ptr<StatusLed> status_led_;
 
   ibl::SurfaceMaterial material_;
   ibl::SceneLighting lighting_;  // no highlight until the first calibration
@@ -895,10 +1025,21 @@ class Kiosk {
   nlohmann::json truth_checks_ = nlohmann::json::array();
   RunReport report_;
   StatusOverlay overlay_;
-  std::vector<std::uint8_t> luma_;
   bool have_maps_ = false;
   std::uint64_t frames_done_ = 0;
   std::string last_logged_status_;
+
+  // The camera: lost and reconnecting, exposure lock, and what the frames said.
+  static constexpr int kTimeoutsBeforeReconnect = 5;  // of 2 s each
+  ReconnectBackoff reconnect_;
+  std::string last_camera_problem_;
+  tracking::TagTrackResult last_track_;  // redrawn over the last frame while the camera is lost
+  std::uint64_t last_frame_number_ = 0;
+  std::uint64_t frames_since_camera_start_ = 0;
+  bool exposure_locked_ = false;
+  SampleSeries exposure_us_, analogue_gain_;
+  double last_exposure_us_ = 0.0, last_analogue_gain_ = 0.0;
+  nlohmann::json exposure_at_last_fit_;  // null until a fit
 };
 
 }  // namespace

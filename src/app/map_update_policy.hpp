@@ -33,6 +33,7 @@
 
 #include <glm/glm.hpp>
 
+#include "core/types.hpp"
 #include "ibl/probe_outline.hpp"
 
 namespace probelight {
@@ -99,14 +100,6 @@ const char* toString(MapSkipReason reason);
 enum class MapUpdateCause { kNone, kFirst, kFreshRequested, kImageChanged, kMaxAge };
 // "first", "fresh requested", "image changed", "max age"; "" for kNone.
 const char* toString(MapUpdateCause cause);
-
-// An 8-bit plane read in place (the detector's luma).
-struct LumaView {
-  const std::uint8_t* data = nullptr;
-  int width = 0;
-  int height = 0;
-  int stride = 0;  // bytes per row
-};
 
 // A cheap summary of the ball's image: the square [c - 0.9 r, c + 0.9 r]^2
 // cut into kCells x kCells cells; each cell holds the mean luma of the pixels

@@ -12,10 +12,20 @@
 
 namespace probelight {
 
+// Statistics over the most recent kWindow samples (a kiosk runs for weeks:
+// keeping every frame's timings would grow without bound); count() is all
+// samples ever added.
 class SampleSeries {
  public:
-  void add(double value) { values_.push_back(value); }
-  size_t count() const { return values_.size(); }
+  static constexpr size_t kWindow = 65536;
+  void add(double value) {
+    if (values_.size() < kWindow)
+      values_.push_back(value);
+    else
+      values_[total_ % kWindow] = value;
+    ++total_;
+  }
+  size_t count() const { return total_; }
   bool empty() const { return values_.empty(); }
   // Nearest-rank percentile, p in [0, 100]; 0 when empty.
   double percentile(double p) const;
@@ -25,6 +35,7 @@ class SampleSeries {
 
  private:
   std::vector<double> values_;
+  size_t total_ = 0;
 };
 
 class RunReport {

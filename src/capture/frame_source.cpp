@@ -2,6 +2,39 @@
 
 namespace probelight {
 
+LumaView FrameBuffer::luma() const {
+  if (layout == PixelLayout::kI420) return LumaView{yuv.data[0], width_px, height_px, yuv.stride_bytes[0]};
+  return LumaView{luma_storage.data(), width_px, height_px, width_px};
+}
+
+void FrameBuffer::finishRgb() {
+  layout = PixelLayout::kRgb8;
+  width_px = rgb.width;
+  height_px = rgb.height;
+  lumaFromRgb(rgb, luma_storage);
+  yuv = YuvPlanes{};
+}
+
+YuvPlanes& FrameBuffer::allocateI420(int width, int height, const YcbcrEncoding& encoding) {
+  layout = PixelLayout::kI420;
+  width_px = width;
+  height_px = height;
+  const int chroma_width = (width + 1) / 2, chroma_height = (height + 1) / 2;
+  const std::size_t luma_bytes = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  const std::size_t chroma_bytes = static_cast<std::size_t>(chroma_width) * static_cast<std::size_t>(chroma_height);
+  yuv_storage.resize(luma_bytes + 2 * chroma_bytes);
+  yuv = YuvPlanes{};
+  yuv.encoding = encoding;
+  yuv.data[0] = yuv_storage.data();
+  yuv.data[1] = yuv_storage.data() + luma_bytes;
+  yuv.data[2] = yuv_storage.data() + luma_bytes + chroma_bytes;
+  yuv.stride_bytes[0] = width;
+  yuv.stride_bytes[1] = yuv.stride_bytes[2] = chroma_width;
+  rgb = ImageRGB8{};
+  luma_storage.clear();
+  return yuv;
+}
+
 ThreadedFrameSource::ThreadedFrameSource(int pool_size) {
   for (int i = 0; i < pool_size; ++i) {
     pool_.push_back(std::make_unique<FrameBuffer>());
@@ -15,9 +48,21 @@ ThreadedFrameSource::~ThreadedFrameSource() {
 }
 
 bool ThreadedFrameSource::start(std::string& error) {
-  if (thread_.joinable()) return true;
+  if (thread_.joinable()) {
+    if (!ended_) return true;
+    stop();  // a stream that ended or failed starts over (a reconnect)
+  }
   if (!prepare(error)) return false;
-  stopping_ = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    // Frames of the old stream are dropped: their pictures are stale.
+    for (FrameBuffer* buffer : ready_) free_.push_back(buffer);
+    ready_.clear();
+    stopping_ = false;
+    ended_ = false;
+    failed_ = false;
+    error_.clear();
+  }
   thread_ = std::thread([this] { run(); });
   return true;
 }
@@ -32,7 +77,10 @@ void ThreadedFrameSource::stop() {
 }
 
 void ThreadedFrameSource::run() {
-  for (std::uint64_t index = 0;; ++index) {
+  // The numbering carries on across restarts: a reconnected camera's frames
+  // follow the old ones (the simulated world's clock does not rewind).
+  for (;; ++next_index_) {
+    const std::uint64_t index = next_index_;
     FrameBuffer* buffer = nullptr;
     {
       std::unique_lock<std::mutex> lock(mutex_);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "core/ycbcr.hpp"
 
 namespace probelight {
 
@@ -28,11 +29,50 @@ struct FrameMetadata {
   std::optional<FrameTruth> truth;
 };
 
-// One pooled buffer. Sim and image sources fill `rgb`; the libcamera source
-// (a later issue) will carry mapped YUV planes instead.
+enum class PixelLayout {
+  kRgb8,  // `rgb`: 3 bytes per pixel (simulated RGB frames, image files)
+  kI420,  // `yuv`: Y' plane, then Cb and Cr at half size (libcamera's YUV420)
+};
+
+// A Y'CbCr 4:2:0 picture as three planes, each with its own row stride
+// (chroma planes are ceil(width/2) x ceil(height/2), chroma sited at the
+// centre of each 2x2 block). The planes are read in place: in a camera's
+// mapped dmabuf, or in the source's own storage.
+struct YuvPlanes {
+  const std::uint8_t* data[3] = {nullptr, nullptr, nullptr};
+  int stride_bytes[3] = {0, 0, 0};
+  YcbcrEncoding encoding;
+  // The dmabuf behind each plane (-1: ordinary memory), for zero-copy import
+  // as an EGLImage, and the plane's byte offset in it.
+  int dmabuf_fd[3] = {-1, -1, -1};
+  std::uint32_t dmabuf_offset[3] = {0, 0, 0};
+  // Stable while the source lives: the same camera buffer has the same id,
+  // so an importer can keep one EGLImage per buffer. 0: not a camera buffer.
+  std::uint64_t buffer_id = 0;
+
+  bool hasDmabuf() const { return dmabuf_fd[0] >= 0 && dmabuf_fd[1] >= 0 && dmabuf_fd[2] >= 0; }
+};
+
+// One pooled buffer.
 struct FrameBuffer {
-  ImageRGB8 rgb;
+  PixelLayout layout = PixelLayout::kRgb8;
+  int width_px = 0;
+  int height_px = 0;
+  ImageRGB8 rgb;                          // kRgb8
+  YuvPlanes yuv;                          // kI420
+  std::vector<std::uint8_t> yuv_storage;  // kI420 planes a source made itself
+  // kRgb8: the luma the source computed on its own thread (off the render
+  // thread); kI420 needs none: the Y' plane is the luma.
+  std::vector<std::uint8_t> luma_storage;
   FrameMetadata metadata;
+
+  // What tag detection reads: the Y' plane, or the computed luma.
+  LumaView luma() const;
+  // Makes this an RGB frame of `rgb`'s size whose luma is computed from it.
+  void finishRgb();
+  // Makes this an I420 frame of the given size in `yuv_storage` (tight rows)
+  // and returns the planes for the caller to fill.
+  YuvPlanes& allocateI420(int width_px, int height_px, const YcbcrEncoding& encoding);
 };
 
 class FrameSource;
@@ -85,6 +125,13 @@ class FrameSource {
   // Why the stream ended or failed (empty while healthy).
   virtual std::string lastError() const = 0;
   virtual std::string name() const = 0;
+  // Freezes (true) or releases (false) auto exposure and white balance, so
+  // that frames taken for a recalibration see the ball the same way. Returns
+  // false when the source has no such controls.
+  virtual bool lockExposure(bool locked) {
+    (void)locked;
+    return false;
+  }
 };
 
 // Shared machinery for sources that make frames on a thread of their own:
@@ -119,6 +166,7 @@ class ThreadedFrameSource : public FrameSource {
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::thread thread_;
+  std::uint64_t next_index_ = 0;
   bool stopping_ = false;
   bool ended_ = false;
   bool failed_ = false;

@@ -93,6 +93,7 @@ ThreadedFrameSource::Produced ImageFrameSource::produce(std::uint64_t index, Fra
     buffer.rgb.resize(bgr.cols, bgr.rows);
     cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, buffer.rgb.pixels.data());
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+    buffer.finishRgb();
     buffer.metadata = FrameMetadata{};
     buffer.metadata.sequence = index;
     buffer.metadata.timestamp_ns =

@@ -3,11 +3,17 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <libcamera/camera.h>
+#include <libcamera/color_space.h>
+#include <libcamera/control_ids.h>
+#include <libcamera/controls.h>
 #include <libcamera/stream.h>
 #include <libcamera/version.h>
+
+#include "core/ycbcr.hpp"
 
 namespace probelight::libcamera_adapter {
 
@@ -23,6 +29,36 @@ inline std::unique_ptr<libcamera::CameraConfiguration> viewfinderConfiguration(l
 template <typename Plane>
 int planeFd(const Plane& plane) {
   return plane.fd.get();
+}
+
+// Freezes (locked) or releases auto exposure, gain and white balance. 0.5
+// replaced AeEnable by ExposureTimeMode and AnalogueGainMode; switching them
+// to manual without a value keeps the last values AE chose, as AeEnable
+// false did before.
+inline void setExposureLocked(libcamera::ControlList& controls, bool locked) {
+#if LIBCAMERA_VERSION_MAJOR > 0 || LIBCAMERA_VERSION_MINOR >= 5
+  controls.set(libcamera::controls::ExposureTimeMode,
+               locked ? libcamera::controls::ExposureTimeModeManual : libcamera::controls::ExposureTimeModeAuto);
+  controls.set(libcamera::controls::AnalogueGainMode,
+               locked ? libcamera::controls::AnalogueGainModeManual : libcamera::controls::AnalogueGainModeAuto);
+#else
+  controls.set(libcamera::controls::AeEnable, !locked);
+#endif
+  controls.set(libcamera::controls::AwbEnable, !locked);
+}
+
+// The Y'CbCr encoding of a validated stream. No colour space (old pipeline
+// handlers) means what they produce: JPEG's full-range Rec601.
+inline YcbcrEncoding encodingOf(const std::optional<libcamera::ColorSpace>& color_space) {
+  if (!color_space) return YcbcrEncoding{YcbcrMatrix::kRec601, true};
+  YcbcrEncoding encoding;
+  switch (color_space->ycbcrEncoding) {
+    case libcamera::ColorSpace::YcbcrEncoding::Rec709: encoding.matrix = YcbcrMatrix::kRec709; break;
+    case libcamera::ColorSpace::YcbcrEncoding::Rec2020: encoding.matrix = YcbcrMatrix::kRec2020; break;
+    default: encoding.matrix = YcbcrMatrix::kRec601; break;
+  }
+  encoding.full_range = color_space->range == libcamera::ColorSpace::Range::Full;
+  return encoding;
 }
 
 }  // namespace probelight::libcamera_adapter

@@ -3,6 +3,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstring>
 
@@ -11,16 +12,21 @@
 #include <libcamera/formats.h>
 #include <libcamera/framebuffer_allocator.h>
 #include <libcamera/request.h>
-#include <opencv2/imgproc.hpp>
 
 #include "capture/libcamera_adapter.hpp"
 
 namespace probelight {
 
-struct LibcameraSource::Mapped {
-  std::vector<std::pair<void*, std::size_t>> regions;  // one per distinct dmabuf
+// One request with its buffer mapped, and the FrameBuffer that describes it
+// while it is lent out.
+struct LibcameraSource::Slot {
+  std::unique_ptr<libcamera::Request> request;
+  std::vector<std::pair<void*, std::size_t>> regions;  // one mapping per distinct dmabuf
   const std::uint8_t* planes[3] = {nullptr, nullptr, nullptr};
-  ~Mapped() {
+  int fds[3] = {-1, -1, -1};
+  std::uint32_t offsets[3] = {0, 0, 0};
+  FrameBuffer frame;
+  ~Slot() {
     for (auto& [address, length] : regions) ::munmap(address, length);
   }
 };
@@ -35,16 +41,20 @@ std::string noCameraMessage(const std::string& wanted_id, const std::vector<std:
   return "camera: no camera '" + wanted_id + "' (libcamera lists " + list + ")";
 }
 
-LibcameraSource::LibcameraSource(LibcameraSettings settings) : ThreadedFrameSource(3), settings_(std::move(settings)) {}
+LibcameraSource::LibcameraSource(LibcameraSettings settings) : settings_(std::move(settings)) {}
 
-LibcameraSource::~LibcameraSource() {
-  stop();  // the capture thread first: it uses the camera
-  shutDown();
-}
+LibcameraSource::~LibcameraSource() { shutDown(); }
 
 std::string LibcameraSource::name() const {
   return "libcamera " + (camera_ ? camera_->id() : settings_.camera_id);
 }
+
+std::string LibcameraSource::lastError() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return error_;
+}
+
+void LibcameraSource::stop() { shutDown(); }
 
 void LibcameraSource::shutDown() {
   {
@@ -53,30 +63,44 @@ void LibcameraSource::shutDown() {
   }
   completed_changed_.notify_all();
   if (camera_) {
-    if (started_) camera_->stop();
+    if (started_) camera_->stop();  // cancels the queued requests
     camera_->requestCompleted.disconnect(this);
+    camera_->disconnected.disconnect(this);
     camera_->release();
     camera_.reset();
   }
-  requests_.clear();
-  mapped_.clear();
+  started_ = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    completed_.clear();
+  }
+  slots_.clear();
   allocator_.reset();
   if (manager_) manager_->stop();
   manager_.reset();
 }
 
-bool LibcameraSource::prepare(std::string& error) {
-  // libcamera allows one CameraManager per process: a failed start must not
-  // keep its manager (a retry, or another source, makes a new one).
-  if (!prepareCamera(error)) {
-    shutDown();
+bool LibcameraSource::start(std::string& error) {
+  // A fresh start every time: after a disconnect the old camera object is
+  // dead, and libcamera allows one CameraManager per process, so a failed
+  // start must not keep its manager either.
+  shutDown();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
     stopping_ = false;
+    disconnected_ = false;
+    error_.clear();
+  }
+  ++generation_;
+  exposure_controls_sent_ = false;
+  if (!startCamera(error)) {
+    shutDown();
     return false;
   }
   return true;
 }
 
-bool LibcameraSource::prepareCamera(std::string& error) {
+bool LibcameraSource::startCamera(std::string& error) {
   manager_ = std::make_unique<libcamera::CameraManager>();
   if (const int result = manager_->start(); result != 0) {
     error = std::string("camera: libcamera's camera manager did not start: ") + std::strerror(-result);
@@ -104,6 +128,10 @@ bool LibcameraSource::prepareCamera(std::string& error) {
   stream_config.pixelFormat = libcamera::formats::YUV420;
   stream_config.size = libcamera::Size(static_cast<unsigned>(settings_.width_px), static_cast<unsigned>(settings_.height_px));
   stream_config.bufferCount = static_cast<unsigned>(settings_.buffer_count);
+  // JPEG's full-range Rec601: all 256 codes carry signal (the ball's
+  // highlights and shadows), and it is what the ISP gives stills. validate()
+  // may change it; the GPU decodes whatever it settles on.
+  stream_config.colorSpace = libcamera::ColorSpace::Sycc;
   if (config->validate() == libcamera::CameraConfiguration::Invalid || stream_config.pixelFormat != libcamera::formats::YUV420 ||
       stream_config.size.width != static_cast<unsigned>(settings_.width_px) ||
       stream_config.size.height != static_cast<unsigned>(settings_.height_px)) {
@@ -117,46 +145,69 @@ bool LibcameraSource::prepareCamera(std::string& error) {
     return false;
   }
   stream_ = stream_config.stream();
-  stride_ = static_cast<int>(stream_config.stride);
   width_ = static_cast<int>(stream_config.size.width);
   height_ = static_cast<int>(stream_config.size.height);
+  // YUV420's chroma rows are half the luma stride.
+  strides_[0] = static_cast<int>(stream_config.stride);
+  strides_[1] = strides_[2] = strides_[0] / 2;
+  encoding_ = libcamera_adapter::encodingOf(stream_config.colorSpace);
   allocator_ = std::make_unique<libcamera::FrameBufferAllocator>(camera_);
   if (allocator_->allocate(stream_) < 0) {
     error = "camera: cannot allocate buffers (is /dev/dma_heap/* readable by this user?)";
     return false;
   }
-  for (const std::unique_ptr<libcamera::FrameBuffer>& frame : allocator_->buffers(stream_)) {
-    std::unique_ptr<libcamera::Request> request = camera_->createRequest();
-    if (!request || request->addBuffer(stream_, frame.get()) != 0) {
+  std::uint64_t slot_number = 0;
+  for (const std::unique_ptr<libcamera::FrameBuffer>& buffer : allocator_->buffers(stream_)) {
+    auto slot = std::make_unique<Slot>();
+    slot->request = camera_->createRequest();
+    if (!slot->request || slot->request->addBuffer(stream_, buffer.get()) != 0) {
       error = "camera: cannot create a capture request";
       return false;
     }
     // Map each dmabuf once; planes are offsets into it.
-    auto mapped = std::make_unique<Mapped>();
     int last_fd = -1;
     void* base = nullptr;
-    for (std::size_t p = 0; p < frame->planes().size() && p < 3; ++p) {
-      const auto& plane = frame->planes()[p];
+    if (buffer->planes().size() != 3) {
+      error = "camera: a YUV420 buffer came with " + std::to_string(buffer->planes().size()) + " planes, not 3";
+      return false;
+    }
+    for (std::size_t p = 0; p < 3; ++p) {
+      const auto& plane = buffer->planes()[p];
       const int fd = libcamera_adapter::planeFd(plane);
       if (fd != last_fd) {
-        const std::size_t length = ::lseek(fd, 0, SEEK_END);
-        base = ::mmap(nullptr, length, PROT_READ, MAP_SHARED, fd, 0);
+        const off_t length = ::lseek(fd, 0, SEEK_END);
+        base = length > 0 ? ::mmap(nullptr, static_cast<std::size_t>(length), PROT_READ, MAP_SHARED, fd, 0) : MAP_FAILED;
         if (base == MAP_FAILED) {
           error = std::string("camera: cannot map a frame buffer: ") + std::strerror(errno);
           return false;
         }
-        mapped->regions.emplace_back(base, length);
+        slot->regions.emplace_back(base, static_cast<std::size_t>(length));
         last_fd = fd;
       }
-      mapped->planes[p] = static_cast<const std::uint8_t*>(base) + plane.offset;
+      slot->planes[p] = static_cast<const std::uint8_t*>(base) + plane.offset;
+      slot->fds[p] = fd;
+      slot->offsets[p] = plane.offset;
     }
-    mapped_.push_back(std::move(mapped));
-    requests_.push_back(std::move(request));
+    FrameBuffer& frame = slot->frame;
+    frame.layout = PixelLayout::kI420;
+    frame.width_px = width_;
+    frame.height_px = height_;
+    for (int p = 0; p < 3; ++p) {
+      frame.yuv.data[p] = slot->planes[p];
+      frame.yuv.stride_bytes[p] = strides_[p];
+      frame.yuv.dmabuf_fd[p] = slot->fds[p];
+      frame.yuv.dmabuf_offset[p] = slot->offsets[p];
+    }
+    frame.yuv.encoding = encoding_;
+    frame.yuv.buffer_id = (generation_ << 32) | ++slot_number;
+    slots_.push_back(std::move(slot));
   }
   camera_->requestCompleted.connect(this, &LibcameraSource::requestCompleted);
   camera_->disconnected.connect(this, [this] {
-    std::lock_guard<std::mutex> lock(mutex_);
-    disconnected_ = true;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      disconnected_ = true;
+    }
     completed_changed_.notify_all();
   });
   if (camera_->start() != 0) {
@@ -164,11 +215,16 @@ bool LibcameraSource::prepareCamera(std::string& error) {
     return false;
   }
   started_ = true;
-  for (std::unique_ptr<libcamera::Request>& request : requests_)
-    if (camera_->queueRequest(request.get()) != 0) {
+  for (const std::unique_ptr<Slot>& slot : slots_) {
+    if (exposure_locked_ != exposure_locked_applied_ || exposure_locked_) {
+      libcamera_adapter::setExposureLocked(slot->request->controls(), exposure_locked_);
+      exposure_locked_applied_ = exposure_locked_;
+    }
+    if (camera_->queueRequest(slot->request.get()) != 0) {
       error = "camera: cannot queue a capture request";
       return false;
     }
+  }
   return true;
 }
 
@@ -182,49 +238,82 @@ void LibcameraSource::requestCompleted(libcamera::Request* request) {
   completed_changed_.notify_all();
 }
 
-ThreadedFrameSource::Produced LibcameraSource::produce(std::uint64_t index, FrameBuffer& buffer, std::string& error) {
+LibcameraSource::Slot* LibcameraSource::slotOf(libcamera::Request* request) {
+  for (const std::unique_ptr<Slot>& slot : slots_)
+    if (slot->request.get() == request) return slot.get();
+  return nullptr;
+}
+
+bool LibcameraSource::lockExposure(bool locked) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  exposure_locked_ = locked;
+  return true;
+}
+
+void LibcameraSource::requeue(libcamera::Request* request) {
+  if (!camera_ || !started_) return;
+  request->reuse(libcamera::Request::ReuseBuffers);
+  bool locked = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stopping_ || disconnected_) return;
+    locked = exposure_locked_;
+  }
+  // Controls persist in the pipeline once set: send them on a change only.
+  if (locked != exposure_locked_applied_ || !exposure_controls_sent_) {
+    libcamera_adapter::setExposureLocked(request->controls(), locked);
+    exposure_locked_applied_ = locked;
+    exposure_controls_sent_ = true;
+  }
+  if (camera_->queueRequest(request) != 0) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    error_ = "camera: cannot re-queue a capture request";
+    disconnected_ = true;
+    completed_changed_.notify_all();
+  }
+}
+
+FrameWait LibcameraSource::waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) {
+  std::vector<libcamera::Request*> stale;
   libcamera::Request* request = nullptr;
   {
     std::unique_lock<std::mutex> lock(mutex_);
-    completed_changed_.wait(lock, [&] { return stopping_ || disconnected_ || !completed_.empty(); });
-    if (stopping_) return Produced::kEndOfStream;
+    if (!completed_changed_.wait_for(lock, timeout,
+                                     [&] { return stopping_ || disconnected_ || !completed_.empty(); }))
+      return FrameWait::kTimeout;
     if (disconnected_) {
-      error = "camera: " + camera_->id() + " disconnected";
-      return Produced::kError;
+      if (error_.empty()) error_ = "camera: " + (camera_ ? camera_->id() : settings_.camera_id) + " disconnected";
+      return FrameWait::kError;
     }
-    request = completed_.front();
-    completed_.pop_front();
+    if (stopping_) return FrameWait::kEndOfStream;
+    // The newest frame; older ones would only add latency.
+    request = completed_.back();
+    completed_.pop_back();
+    stale.assign(completed_.begin(), completed_.end());
+    completed_.clear();
   }
-  std::size_t slot = 0;
-  for (; slot < requests_.size() && requests_[slot].get() != request; ++slot) {
+  for (libcamera::Request* old : stale) requeue(old);
+  Slot* slot = slotOf(request);
+  if (!slot) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    error_ = "camera: a completed request that is not ours";
+    return FrameWait::kError;
   }
-  const Mapped& mapped = *mapped_[slot];
-  // I420 to RGB; rows of stride bytes (chroma planes half of it).
-  cv::Mat yuv(height_ * 3 / 2, width_, CV_8UC1);
-  for (int y = 0; y < height_; ++y) std::memcpy(yuv.ptr(y), mapped.planes[0] + y * stride_, static_cast<std::size_t>(width_));
-  const int chroma_stride = stride_ / 2, chroma_width = width_ / 2, chroma_height = height_ / 2;
-  std::uint8_t* u = yuv.ptr(height_);
-  std::uint8_t* v = u + chroma_width * chroma_height;
-  for (int y = 0; y < chroma_height; ++y) {
-    std::memcpy(u + y * chroma_width, mapped.planes[1] + y * chroma_stride, static_cast<std::size_t>(chroma_width));
-    std::memcpy(v + y * chroma_width, mapped.planes[2] + y * chroma_stride, static_cast<std::size_t>(chroma_width));
+  if (request->status() != libcamera::Request::RequestComplete) {
+    // A frame the pipeline could not fill: drop it, keep streaming.
+    requeue(request);
+    return FrameWait::kTimeout;
   }
-  buffer.rgb.resize(width_, height_);
-  cv::Mat rgb(height_, width_, CV_8UC3, buffer.rgb.pixels.data());
-  cv::cvtColor(yuv, rgb, cv::COLOR_YUV2RGB_I420);
+  FrameBuffer& frame = slot->frame;
+  frame.metadata = FrameMetadata{};
+  frame.metadata.sequence = sequence_++;
   const libcamera::ControlList& metadata = request->metadata();
-  buffer.metadata = FrameMetadata{};
-  buffer.metadata.sequence = index;
-  if (auto timestamp = metadata.get(libcamera::controls::SensorTimestamp)) buffer.metadata.timestamp_ns = *timestamp;
-  if (auto exposure = metadata.get(libcamera::controls::ExposureTime)) buffer.metadata.exposure_us = *exposure;
-  if (auto gain = metadata.get(libcamera::controls::AnalogueGain)) buffer.metadata.analogue_gain = *gain;
-  buffer.metadata.origin = "camera:" + std::to_string(index);
-  request->reuse(libcamera::Request::ReuseBuffers);
-  if (camera_->queueRequest(request) != 0) {
-    error = "camera: cannot re-queue a capture request";
-    return Produced::kError;
-  }
-  return Produced::kFrame;
+  if (auto timestamp = metadata.get(libcamera::controls::SensorTimestamp)) frame.metadata.timestamp_ns = *timestamp;
+  if (auto exposure = metadata.get(libcamera::controls::ExposureTime)) frame.metadata.exposure_us = *exposure;
+  if (auto gain = metadata.get(libcamera::controls::AnalogueGain)) frame.metadata.analogue_gain = *gain;
+  frame.metadata.origin = "camera:" + std::to_string(frame.metadata.sequence);
+  lease = FrameLease(&frame, [this, request](FrameBuffer*) { requeue(request); });
+  return FrameWait::kFrame;
 }
 
 }  // namespace probelight

@@ -1,10 +1,18 @@
 // Frames from the board's camera through libcamera: the configured camera
-// (the first by default), one stream (YUV420 at the configured size),
-// requests queued and re-queued; libcamera's completion callback only hands
-// the request over (it never blocks its thread), and the capture thread
-// converts it into a pooled buffer and re-queues it. The Y plane is what
-// tag detection reads; the RGB picture is uploaded (zero-copy dmabuf import
-// is a later step).
+// (the first by default), one YUV420 stream at the configured size, requests
+// queued and re-queued.
+//
+// Zero-copy: each request's buffer is mapped once; a frame handed out is a
+// lease on the request itself: its I420 planes are read in place (tag
+// detection reads the Y' plane; the GPU imports the dmabuf or uploads the
+// planes), and dropping the lease re-queues the request. libcamera's
+// completion callback only hands the request over, so its thread never
+// blocks. When several frames completed since the last wait, the newest is
+// handed out and the older ones go straight back (lowest latency).
+//
+// Exposure: lockExposure(true) freezes auto exposure and white balance at
+// their current values (the lights are being fitted from the ball's image);
+// each frame's exposure time and gain come in its metadata.
 //
 // Differences between libcamera versions (Debian's 0.0.3, Raspberry Pi OS's
 // 0.3-0.5) are confined to capture/libcamera_adapter.hpp.
@@ -36,20 +44,29 @@ struct LibcameraSettings {
   int buffer_count = 4;
 };
 
-class LibcameraSource final : public ThreadedFrameSource {
+class LibcameraSource final : public FrameSource {
  public:
   explicit LibcameraSource(LibcameraSettings settings);
   ~LibcameraSource() override;
-  std::string name() const override;
 
- protected:
-  bool prepare(std::string& error) override;
-  Produced produce(std::uint64_t index, FrameBuffer& buffer, std::string& error) override;
+  // Opens, configures and starts the camera; after a failure or a
+  // disconnect, a later start() tries again from scratch (a reconnect).
+  bool start(std::string& error) override;
+  void stop() override;
+  FrameWait waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) override;
+  std::string lastError() const override;
+  std::string name() const override;
+  bool lockExposure(bool locked) override;
+  // The stream's colour encoding as the camera agreed it.
+  YcbcrEncoding encoding() const { return encoding_; }
 
  private:
-  struct Mapped;
-  bool prepareCamera(std::string& error);
+  struct Slot;
+  bool startCamera(std::string& error);
   void requestCompleted(libcamera::Request* request);
+  // Re-queues a request, with the exposure controls it needs.
+  void requeue(libcamera::Request* request);
+  Slot* slotOf(libcamera::Request* request);
   void shutDown();
 
   LibcameraSettings settings_;
@@ -57,16 +74,26 @@ class LibcameraSource final : public ThreadedFrameSource {
   std::shared_ptr<libcamera::Camera> camera_;
   std::unique_ptr<libcamera::FrameBufferAllocator> allocator_;
   libcamera::Stream* stream_ = nullptr;
-  int stride_ = 0, width_ = 0, height_ = 0;
-  std::vector<std::unique_ptr<libcamera::Request>> requests_;
-  std::vector<std::unique_ptr<Mapped>> mapped_;
+  int width_ = 0, height_ = 0;
+  int strides_[3] = {0, 0, 0};
+  YcbcrEncoding encoding_;
+  std::vector<std::unique_ptr<Slot>> slots_;
   bool started_ = false;
+  // Buffers of each start() get fresh ids, so that an importer's cache
+  // never mistakes a new stream's buffer for an old one.
+  std::uint64_t generation_ = 0;
+  std::uint64_t sequence_ = 0;
 
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::condition_variable completed_changed_;
   std::deque<libcamera::Request*> completed_;
   bool disconnected_ = false;
   bool stopping_ = false;
+  std::string error_;
+  // Exposure lock wanted, and what the last queued request asked for.
+  bool exposure_locked_ = false;
+  bool exposure_locked_applied_ = false;
+  bool exposure_controls_sent_ = false;
 };
 
 // Why no camera was found, with the usual causes: one line.

@@ -2,10 +2,30 @@
 
 #include <exception>
 
+#include "sim/camera_ycbcr.hpp"
+
 namespace probelight {
 
-SimFrameSource::SimFrameSource(std::shared_ptr<const sim::World> world, std::uint64_t frame_count, int pool_size)
-    : ThreadedFrameSource(pool_size), world_(std::move(world)), frame_count_(frame_count) {}
+SimFrameSource::SimFrameSource(std::shared_ptr<const sim::World> world, std::uint64_t frame_count, int pool_size,
+                               SimCameraOptions options)
+    : ThreadedFrameSource(pool_size), world_(std::move(world)), frame_count_(frame_count), options_(options) {}
+
+bool SimFrameSource::lockExposure(bool locked) {
+  (void)locked;
+  return true;
+}
+
+bool SimFrameSource::prepare(std::string& error) {
+  if (lost_ && !came_back_) {
+    if (restarts_failed_ < options_.failed_restarts) {
+      ++restarts_failed_;
+      error = "camera: sim camera unplugged (no camera found)";
+      return false;
+    }
+    came_back_ = true;
+  }
+  return true;
+}
 
 SimFrameSource::~SimFrameSource() {
   // produce() uses our members: stop the thread before they are destroyed.
@@ -16,14 +36,30 @@ std::string SimFrameSource::name() const { return "sim:" + world_->scene().envir
 
 ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, FrameBuffer& buffer, std::string& error) {
   if (frame_count_ != 0 && index >= frame_count_) return Produced::kEndOfStream;
+  if (options_.lost_at_frame >= 0 && index == static_cast<std::uint64_t>(options_.lost_at_frame) && !lost_) {
+    lost_ = true;
+    error = "camera: sim camera disconnected";
+    return Produced::kError;
+  }
   try {
     FrameTruth truth;
-    world_->render(index, buffer.rgb, truth);
+    if (options_.layout == PixelLayout::kI420) {
+      world_->render(index, rendered_, truth);
+      YuvPlanes& planes = buffer.allocateI420(rendered_.width, rendered_.height, YcbcrEncoding{YcbcrMatrix::kRec601, true});
+      sim::encodeI420Sycc(rendered_, const_cast<std::uint8_t*>(planes.data[0]), planes.stride_bytes[0],
+                          const_cast<std::uint8_t*>(planes.data[1]), const_cast<std::uint8_t*>(planes.data[2]),
+                          planes.stride_bytes[1]);
+    } else {
+      world_->render(index, buffer.rgb, truth);
+      buffer.finishRgb();
+    }
     buffer.metadata = FrameMetadata{};
     buffer.metadata.sequence = index;
     // Exact 30 fps without drift: index * 1e9 / 30, rounded down.
     buffer.metadata.timestamp_ns = static_cast<std::int64_t>(index * 1'000'000'000ull / 30u);
     buffer.metadata.origin = "sim:" + std::to_string(index);
+    buffer.metadata.exposure_us = 10000.0;
+    buffer.metadata.analogue_gain = 1.0;
     buffer.metadata.truth = truth;
   } catch (const std::exception& e) {
     error = "sim frame " + std::to_string(index) + ": " + e.what();

@@ -10,22 +10,42 @@
 
 namespace probelight {
 
+struct SimCameraOptions {
+  // kRgb8, or kI420 as the board's camera gives (sim/camera_ycbcr.hpp).
+  PixelLayout layout = PixelLayout::kRgb8;
+  // A camera that disappears: frame `lost_at_frame` fails ("disconnected"),
+  // then the next `failed_restarts` start() calls fail; the one after
+  // succeeds and frames go on from where they stopped. -1: never.
+  std::int64_t lost_at_frame = -1;
+  int failed_restarts = 0;
+};
+
 class SimFrameSource : public ThreadedFrameSource {
  public:
   // Frame i has sequence i, timestamp_ns floor(i * 1e9 / 30) (30 fps), origin
   // "sim:<i>" and its truth. frame_count 0: endless. The world is shared (render() is thread-safe), so
   // tests can ask it for truth while frames are being made.
-  SimFrameSource(std::shared_ptr<const sim::World> world, std::uint64_t frame_count, int pool_size = 3);
+  SimFrameSource(std::shared_ptr<const sim::World> world, std::uint64_t frame_count, int pool_size = 3,
+                 SimCameraOptions options = {});
   ~SimFrameSource() override;
 
   std::string name() const override;
+  // The simulated camera has a fixed exposure (10 ms, gain 1, in every
+  // frame's metadata): locking it changes nothing, and succeeds.
+  bool lockExposure(bool locked) override;
 
  protected:
+  bool prepare(std::string& error) override;
   Produced produce(std::uint64_t index, FrameBuffer& buffer, std::string& error) override;
 
  private:
   std::shared_ptr<const sim::World> world_;
   std::uint64_t frame_count_;
+  SimCameraOptions options_;
+  bool lost_ = false;       // the camera has gone (frame lost_at_frame failed)
+  bool came_back_ = false;  // ... and a restart brought it back
+  int restarts_failed_ = 0;
+  ImageRGB8 rendered_;      // kI420: the picture before encoding
 };
 
 }  // namespace probelight

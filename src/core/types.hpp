@@ -49,6 +49,14 @@ struct PoseCamFromWorld {
 };
 
 // Tightly packed 8-bit RGB image (camera-encoded, sRGB by default).
+// An 8-bit plane read in place (the detector's luma).
+struct LumaView {
+  const std::uint8_t* data = nullptr;
+  int width = 0;
+  int height = 0;
+  int stride = 0;  // bytes per row
+};
+
 struct ImageRGB8 {
   int width = 0;
   int height = 0;
@@ -79,5 +87,10 @@ struct FrameTruth {
   bool tag_fully_visible = false;
   bool probe_fully_visible = false;
 };
+
+// BT.601 luma of sRGB bytes (OpenCV's RGB->GRAY fixed-point weights and
+// rounding), packed: stride = width. For the sim and image sources, which
+// give RGB; the libcamera source has a Y' plane already.
+void lumaFromRgb(const ImageRGB8& rgb, std::vector<std::uint8_t>& luma);
 
 }  // namespace probelight

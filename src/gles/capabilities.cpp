@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include <EGL/egl.h>
 #include <GLES2/gl2.h>
 
 namespace probelight::gles {
@@ -28,6 +29,9 @@ Capabilities probeCapabilities() {
   caps.depth_texture = hasExtension(extensions, "GL_OES_depth_texture");
   caps.egl_image_external = hasExtension(extensions, "GL_OES_EGL_image_external");
   caps.standard_derivatives = hasExtension(extensions, "GL_OES_standard_derivatives");
+  caps.unpack_subimage = hasExtension(extensions, "GL_EXT_unpack_subimage");
+  if (const EGLDisplay display = eglGetCurrentDisplay(); display != EGL_NO_DISPLAY)
+    caps.egl_dmabuf_import = hasExtension(eglQueryString(display, EGL_EXTENSIONS), "EGL_EXT_image_dma_buf_import");
 
   GLint range[2] = {0, 0};
   GLint precision = 0;
@@ -75,6 +79,8 @@ std::string Capabilities::summary() const {
   flag(depth_texture, "depth_texture");
   flag(egl_image_external, "egl_image_external");
   flag(standard_derivatives, "derivatives");
+  flag(unpack_subimage, "unpack_subimage");
+  flag(egl_dmabuf_import, "dmabuf_import");
   text += canRenderHalfFloat() ? " | maps: half float" : " | maps: 8-bit";
   return text;
 }

@@ -16,6 +16,8 @@ struct Capabilities {
   bool depth_texture = false;              // GL_OES_depth_texture
   bool egl_image_external = false;         // GL_OES_EGL_image_external
   bool standard_derivatives = false;       // GL_OES_standard_derivatives
+  bool unpack_subimage = false;            // GL_EXT_unpack_subimage (GL_UNPACK_ROW_LENGTH)
+  bool egl_dmabuf_import = false;          // EGL_EXT_image_dma_buf_import on the current display
   bool fragment_highp = false;             // highp float exists in fragment shaders
   int fragment_highp_mantissa_bits = 0;    // 23 for IEEE single; 0 when absent
   int fragment_mediump_mantissa_bits = 0;  // 10 for IEEE half

@@ -129,7 +129,7 @@ constexpr std::string_view kFragmentPrelude =
 // its own GLSL source-string number through `#line 1 N`, so compiler messages
 // such as "2:14(3): error" can be mapped back to labels[2].
 bool expandIncludes(std::string_view file_name, std::string_view source, int depth, std::vector<std::string>& labels,
-                    std::string& out, std::string& error) {
+                    std::string& out, std::string& extensions, std::string& error) {
   const int source_number = static_cast<int>(labels.size());
   labels.emplace_back(file_name);
   out += "#line 1 " + std::to_string(source_number) + "\n";
@@ -144,6 +144,11 @@ bool expandIncludes(std::string_view file_name, std::string_view source, int dep
     std::string_view trimmed = first == std::string_view::npos ? std::string_view{} : line.substr(first);
     if (trimmed.rfind("#version", 0) == 0) {
       out += "\n";  // the prelude already put #version first; keep line numbers
+    } else if (trimmed.rfind("#extension", 0) == 0) {
+      // GLSL ES wants #extension before any other token, so it goes up
+      // above the prelude's precision statements.
+      extensions += std::string(trimmed) + "\n";
+      out += "\n";
     } else if (trimmed.rfind("#include", 0) == 0) {
       const size_t open = trimmed.find('"');
       const size_t close = open == std::string_view::npos ? open : trimmed.find('"', open + 1);
@@ -163,7 +168,7 @@ bool expandIncludes(std::string_view file_name, std::string_view source, int dep
         error = std::string(file_name) + ": #include nested too deeply (a cycle?)";
         return false;
       }
-      if (!expandIncludes(included, found->second, depth + 1, labels, out, error)) return false;
+      if (!expandIncludes(included, found->second, depth + 1, labels, out, extensions, error)) return false;
       out += "#line " + std::to_string(line_number + 1) + " " + std::to_string(source_number) + "\n";
     } else {
       out += line;
@@ -185,13 +190,17 @@ std::string describeSources(const std::vector<std::string>& labels) {
 GLuint compileShader(GLenum stage, std::string_view file_name, std::string_view source, std::string_view defines,
                      std::string& error) {
   const bool fragment = stage == GL_FRAGMENT_SHADER;
-  std::string text(fragment ? kFragmentPrelude : kVertexPrelude);
-  text += defines;
-  text += "\n";
   // Source number 0 is the prelude; the shader's own file starts at 1.
   std::vector<std::string> labels{"<prelude>"};
-  std::string body;
-  if (!expandIncludes(file_name, source, 0, labels, body, error)) return 0;
+  std::string body, extensions;
+  if (!expandIncludes(file_name, source, 0, labels, body, extensions, error)) return 0;
+  std::string_view prelude = fragment ? kFragmentPrelude : kVertexPrelude;
+  const std::string_view version_line = "#version 100\n";
+  std::string text(version_line);
+  text += extensions;
+  text += prelude.substr(version_line.size());
+  text += defines;
+  text += "\n";
   text += body;
   GLuint shader = glCreateShader(stage);
   const char* pointer = text.c_str();

@@ -1,10 +1,6 @@
 #include "input/gpio_button.hpp"
 
-#include <cerrno>
-#include <cstring>
 #include <ctime>
-
-#include <gpiod.h>
 
 namespace probelight {
 
@@ -23,33 +19,13 @@ GpioButton::GpioButton(GpioButtonSettings settings) : settings_(std::move(settin
 GpioButton::~GpioButton() {
   stopping_ = true;
   if (thread_.joinable()) thread_.join();
-  if (line_) gpiod_line_release(line_);
-  if (chip_) gpiod_chip_close(chip_);
 }
 
 std::string GpioButton::name() const { return "gpio " + settings_.chip + " line " + std::to_string(settings_.line); }
 
 bool GpioButton::start(std::string& error) {
-  chip_ = gpiod_chip_open_lookup(settings_.chip.c_str());
-  if (!chip_) {
-    error = "button: GPIO chip '" + settings_.chip + "' not found (" + std::strerror(errno) +
-            "): is this a board with GPIO, and may this user open /dev/gpiochip* (group gpio)?";
-    return false;
-  }
-  line_ = gpiod_chip_get_line(chip_, static_cast<unsigned>(settings_.line));
-  if (!line_) {
-    error = "button: " + settings_.chip + " has no line " + std::to_string(settings_.line) + " (" +
-            std::to_string(gpiod_chip_num_lines(chip_)) + " lines)";
-    return false;
-  }
-  gpiod_line_request_config config{};
-  config.consumer = "probelight";
-  config.request_type = GPIOD_LINE_REQUEST_EVENT_BOTH_EDGES;
-  config.flags = GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW | GPIOD_LINE_REQUEST_FLAG_BIAS_PULL_UP;
-  if (gpiod_line_request(line_, &config, 0) != 0) {
-    error = "button: cannot request " + settings_.chip + " line " + std::to_string(settings_.line) + " (" +
-            std::strerror(errno) + "): another program may hold it";
-    line_ = nullptr;
+  if (!line_.open(settings_.chip, settings_.line, "probelight", error)) {
+    error = "button: " + error;
     return false;
   }
   thread_ = std::thread([this] { readLoop(); });
@@ -58,7 +34,7 @@ bool GpioButton::start(std::string& error) {
 
 void GpioButton::readLoop() {
   // The logical value (active-low applied): 1 while the button is held.
-  ButtonDebouncer debouncer(settings_.debounce, gpiod_line_get_value(line_) == 1);
+  ButtonDebouncer debouncer(settings_.debounce, line_.level() == 1);
   auto deliver = [this](const std::vector<ButtonEvent::Kind>& kinds) {
     if (kinds.empty()) return;
     std::lock_guard<std::mutex> lock(mutex_);
@@ -67,19 +43,17 @@ void GpioButton::readLoop() {
   while (!stopping_) {
     // Wake every 5 ms without an edge, so the debouncer can settle a level
     // and time a long press.
-    const timespec timeout{0, 5'000'000};
-    const int ready = gpiod_line_event_wait(line_, &timeout);
+    const int ready = line_.waitEdge(5'000'000);
     if (ready < 0) break;  // the chip went away: no more presses
     if (ready == 0) {
       deliver(debouncer.onTime(monotonicNs()));
       continue;
     }
-    gpiod_line_event event{};
-    if (gpiod_line_event_read(line_, &event) != 0) continue;
+    line_.discardEdges();
     // The level after this edge, read back rather than taken from the
     // event's type: what active-low does to event types has changed between
     // kernels, the line's value has not.
-    const int value = gpiod_line_get_value(line_);
+    const int value = line_.level();
     if (value >= 0) deliver(debouncer.onLevel(monotonicNs(), value == 1));
   }
 }

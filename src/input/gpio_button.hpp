@@ -1,8 +1,7 @@
-// The board's push button on a GPIO line, through libgpiod (v1 API, as
-// Debian bookworm and Raspberry Pi OS bookworm ship it: 1.6): the line is
-// requested with pull-up bias and active-low (the button shorts it to
-// ground), edge events on both edges are read on a thread of their own and
-// turned into presses by ButtonDebouncer.
+// The board's push button on a GPIO line, through libgpiod (v1 or v2:
+// input/gpio_lines.hpp): the line is requested with pull-up bias and
+// active-low (the button shorts it to ground), edge events on both edges are
+// read on a thread of their own and turned into presses by ButtonDebouncer.
 #pragma once
 
 #include <atomic>
@@ -13,14 +12,12 @@
 
 #include "input/button_source.hpp"
 #include "input/debounce.hpp"
-
-struct gpiod_chip;
-struct gpiod_line;
+#include "input/gpio_lines.hpp"
 
 namespace probelight {
 
 struct GpioButtonSettings {
-  std::string chip = "gpiochip0";  // name, number, path or label, as gpiod_chip_open_lookup takes it
+  std::string chip = "gpiochip0";  // name, number, path or label (input/gpio_lines.hpp)
   int line = 17;                   // BCM 17: header pin 11, next to ground on pin 9
   DebounceSettings debounce;
 };
@@ -39,8 +36,7 @@ class GpioButton final : public ButtonSource {
   void readLoop();
 
   GpioButtonSettings settings_;
-  gpiod_chip* chip_ = nullptr;
-  gpiod_line* line_ = nullptr;
+  GpioInputLine line_;
   std::thread thread_;
   std::mutex mutex_;
   std::vector<ButtonEvent> pending_;

@@ -1,34 +1,138 @@
 #include "pipeline/camera_frame_texture.hpp"
 
-namespace probelight::pipeline {
+#include <cstdio>
+#include <cstring>
 
-bool CameraFrameTexture::init(const gles::Capabilities& capabilities, std::string& error) {
+#include "core/ycbcr.hpp"
+
+#ifndef GL_UNPACK_ROW_LENGTH_EXT
+#define GL_UNPACK_ROW_LENGTH_EXT 0x0CF2
+#endif
+
+namespace probelight::pipeline {
+namespace {
+
+// DRM_FORMAT_YUV420 ('YU12'): three planes Y, Cb, Cr, chroma halved both
+// ways. Spelled out so that the pipeline does not need libdrm's headers.
+constexpr EGLint kDrmFormatYuv420 = static_cast<EGLint>('Y' | ('U' << 8) | ('1' << 16) | (static_cast<unsigned>('2') << 24));
+
+// Restores the framebuffer and viewport a pass found: the conversion runs
+// in the middle of other stages' state.
+class SavedTarget {
+ public:
+  SavedTarget() {
+    glGetIntegerv(GL_FRAMEBUFFER_BINDING, &framebuffer_);
+    glGetIntegerv(GL_VIEWPORT, viewport_);
+  }
+  ~SavedTarget() {
+    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(framebuffer_));
+    glViewport(viewport_[0], viewport_[1], viewport_[2], viewport_[3]);
+  }
+
+ private:
+  GLint framebuffer_ = 0;
+  GLint viewport_[4] = {0, 0, 0, 0};
+};
+
+}  // namespace
+
+const char* toString(FrameUploadPath path) {
+  switch (path) {
+    case FrameUploadPath::kNone: return "none";
+    case FrameUploadPath::kRgbUpload: return "rgb upload";
+    case FrameUploadPath::kYuvUpload: return "yuv upload";
+    case FrameUploadPath::kDmabufImport: return "dmabuf import";
+  }
+  return "?";
+}
+
+CameraFrameTexture::~CameraFrameTexture() { forgetImportedBuffers(); }
+
+bool CameraFrameTexture::init(const gles::Capabilities& capabilities, std::string& error, bool allow_dmabuf_import) {
   max_texture_size_px_ = capabilities.max_texture_size_px;
   if (max_texture_size_px_ <= 0) {
     error = "CameraFrameTexture: capabilities were not probed (max texture size 0); call gles::probeCapabilities() first";
     return false;
   }
+  unpack_row_length_ = capabilities.unpack_subimage;
+  auto planes = gles::Program::fromEmbedded("camera_yuv.vert", "camera_yuv_planes.frag", "", error);
+  if (!planes || !quad_.init(error)) return false;
+  planes_program_ = std::move(*planes);
+  if (allow_dmabuf_import && capabilities.egl_dmabuf_import && capabilities.egl_image_external) {
+    display_ = eglGetCurrentDisplay();
+    create_image_ = reinterpret_cast<PFNEGLCREATEIMAGEKHRPROC>(eglGetProcAddress("eglCreateImageKHR"));
+    destroy_image_ = reinterpret_cast<PFNEGLDESTROYIMAGEKHRPROC>(eglGetProcAddress("eglDestroyImageKHR"));
+    image_target_texture_ =
+        reinterpret_cast<PFNGLEGLIMAGETARGETTEXTURE2DOESPROC>(eglGetProcAddress("glEGLImageTargetTexture2DOES"));
+    std::string external_error;
+    auto external = gles::Program::fromEmbedded("camera_yuv.vert", "camera_external.frag", "", external_error);
+    if (display_ != EGL_NO_DISPLAY && create_image_ && destroy_image_ && image_target_texture_ && external) {
+      external_program_ = std::move(*external);
+      dmabuf_import_available_ = true;
+    } else {
+      dmabuf_import_problem_ = external ? "EGL lacks eglCreateImageKHR or glEGLImageTargetTexture2DOES"
+                                        : "the external-image shader did not compile: " + external_error;
+    }
+  }
   return true;
 }
 
-bool CameraFrameTexture::upload(const ImageRGB8& image, std::string& error) {
-  if (image.empty() || image.pixels.size() != static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * 3u) {
-    error = "CameraFrameTexture: the camera image is empty or its pixel buffer does not match " +
-            std::to_string(image.width) + "x" + std::to_string(image.height) + " RGB";
+bool CameraFrameTexture::checkSize(int width_px, int height_px, std::string& error) const {
+  if (width_px <= 0 || height_px <= 0) {
+    error = "CameraFrameTexture: the camera frame is empty (" + std::to_string(width_px) + "x" + std::to_string(height_px) + ")";
     return false;
   }
-  if (image.width > max_texture_size_px_ || image.height > max_texture_size_px_) {
-    error = "CameraFrameTexture: camera frame " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+  if (width_px > max_texture_size_px_ || height_px > max_texture_size_px_) {
+    error = "CameraFrameTexture: camera frame " + std::to_string(width_px) + "x" + std::to_string(height_px) +
             " exceeds the GPU's maximum texture size " + std::to_string(max_texture_size_px_) +
             "; configure a smaller camera mode";
     return false;
   }
+  return true;
+}
+
+bool CameraFrameTexture::upload(const FrameBuffer& frame, std::string& error) {
+  if (frame.layout == PixelLayout::kRgb8) return upload(frame.rgb, error);
+  if (!checkSize(frame.width_px, frame.height_px, error)) return false;
+  const YuvPlanes& planes = frame.yuv;
+  if (!planes.data[0] || !planes.data[1] || !planes.data[2] || planes.stride_bytes[0] < frame.width_px ||
+      planes.stride_bytes[1] < (frame.width_px + 1) / 2 || planes.stride_bytes[2] < (frame.width_px + 1) / 2) {
+    error = "CameraFrameTexture: the I420 frame's planes are missing or their strides are shorter than a row";
+    return false;
+  }
+  if (!ensureRenderableTexture(frame.width_px, frame.height_px, error)) return false;
+  if (dmabuf_import_available_ && planes.hasDmabuf()) {
+    std::string import_error;
+    if (importDmabuf(planes, frame.width_px, frame.height_px, import_error)) {
+      last_path_ = FrameUploadPath::kDmabufImport;
+      return true;
+    }
+    // The driver would not take this buffer: the upload path from now on.
+    dmabuf_import_available_ = false;
+    dmabuf_import_problem_ = import_error;
+    forgetImportedBuffers();
+  }
+  if (!uploadPlanes(planes, frame.width_px, frame.height_px, error)) return false;
+  last_path_ = FrameUploadPath::kYuvUpload;
+  return true;
+}
+
+bool CameraFrameTexture::upload(const ImageRGB8& image, std::string& error) {
+  if (image.pixels.size() != static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * 3u) {
+    error = "CameraFrameTexture: the camera image's pixel buffer does not match " + std::to_string(image.width) + "x" +
+            std::to_string(image.height) + " RGB";
+    return false;
+  }
+  if (!checkSize(image.width, image.height, error)) return false;
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);  // rows are tightly packed RGB
-  if (image.width != width_px_ || image.height != height_px_ || !texture_.valid()) {
+  last_path_ = FrameUploadPath::kRgbUpload;
+  if (image.width != width_px_ || image.height != height_px_ || !texture_.valid() || renderable_) {
     auto texture = gles::createTexture2D(image.width, image.height, GL_RGB, GL_UNSIGNED_BYTE, GL_LINEAR,
                                          image.pixels.data(), error);
     if (!texture) return false;
     texture_ = std::move(*texture);
+    framebuffer_ = gles::Framebuffer{};
+    renderable_ = false;
     width_px_ = image.width;
     height_px_ = image.height;
     return true;
@@ -36,6 +140,170 @@ bool CameraFrameTexture::upload(const ImageRGB8& image, std::string& error) {
   glBindTexture(GL_TEXTURE_2D, texture_.id());
   glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, image.width, image.height, GL_RGB, GL_UNSIGNED_BYTE, image.pixels.data());
   return gles::checkGl("glTexSubImage2D(camera frame)", error);
+}
+
+bool CameraFrameTexture::ensureRenderableTexture(int width_px, int height_px, std::string& error) {
+  if (renderable_ && width_px == width_px_ && height_px == height_px_) return true;
+  // RGBA bytes: the one colour-renderable texture format every GLES2 GPU has.
+  auto texture = gles::createTexture2D(width_px, height_px, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, nullptr, error);
+  if (!texture) return false;
+  gles::Framebuffer framebuffer = gles::Framebuffer::create();
+  SavedTarget saved;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer.id());
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture->id(), 0);
+  const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+  if (status != GL_FRAMEBUFFER_COMPLETE) {
+    error = "CameraFrameTexture: cannot render the camera frame into an RGBA texture: " +
+            gles::framebufferStatusName(status);
+    return false;
+  }
+  texture_ = std::move(*texture);
+  framebuffer_ = std::move(framebuffer);
+  renderable_ = true;
+  width_px_ = width_px;
+  height_px_ = height_px;
+  return true;
+}
+
+bool CameraFrameTexture::uploadPlane(gles::Texture& texture, int& allocated_width, int& allocated_height,
+                                     const std::uint8_t* data, int stride_bytes, int width_px, int height_px,
+                                     std::string& error) {
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  const bool tight = stride_bytes == width_px;
+  const bool reallocate = !texture.valid() || allocated_width != width_px || allocated_height != height_px;
+  if (reallocate) {
+    auto created = gles::createTexture2D(width_px, height_px, GL_LUMINANCE, GL_UNSIGNED_BYTE, GL_LINEAR,
+                                         tight ? data : nullptr, error);
+    if (!created) return false;
+    texture = std::move(*created);
+    allocated_width = width_px;
+    allocated_height = height_px;
+    if (tight) return true;
+  }
+  glBindTexture(GL_TEXTURE_2D, texture.id());
+  if (tight) {
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_px, height_px, GL_LUMINANCE, GL_UNSIGNED_BYTE, data);
+  } else if (unpack_row_length_) {
+    glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, stride_bytes);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_px, height_px, GL_LUMINANCE, GL_UNSIGNED_BYTE, data);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, 0);
+  } else {
+    // Plain GLES2 cannot skip padding: one row at a time (cameras pad rows
+    // to 32 or 64 bytes; the copy stays in the driver).
+    for (int row = 0; row < height_px; ++row)
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, row, width_px, 1, GL_LUMINANCE, GL_UNSIGNED_BYTE,
+                      data + static_cast<std::size_t>(row) * static_cast<std::size_t>(stride_bytes));
+  }
+  return gles::checkGl("glTexSubImage2D(camera plane)", error);
+}
+
+bool CameraFrameTexture::uploadPlanes(const YuvPlanes& planes, int width_px, int height_px, std::string& error) {
+  const int chroma_width = (width_px + 1) / 2, chroma_height = (height_px + 1) / 2;
+  const int widths[3] = {width_px, chroma_width, chroma_width};
+  const int heights[3] = {height_px, chroma_height, chroma_height};
+  for (int p = 0; p < 3; ++p)
+    if (!uploadPlane(planes_[p], plane_width_[p], plane_height_[p], planes.data[p], planes.stride_bytes[p], widths[p],
+                     heights[p], error))
+      return false;
+  const YcbcrDecoding decoding = ycbcrDecoding(planes.encoding);
+  planes_program_.use();
+  for (int p = 0; p < 3; ++p) {
+    glActiveTexture(GL_TEXTURE0 + p);
+    glBindTexture(GL_TEXTURE_2D, planes_[p].id());
+  }
+  glUniform1i(planes_program_.uniform("u_luma"), 0);
+  glUniform1i(planes_program_.uniform("u_cb"), 1);
+  glUniform1i(planes_program_.uniform("u_cr"), 2);
+  glUniform2f(planes_program_.uniform("u_chroma_scale"), static_cast<float>(width_px) / (2.0f * chroma_width),
+              static_cast<float>(height_px) / (2.0f * chroma_height));
+  glUniformMatrix3fv(planes_program_.uniform("u_ycbcr_to_rgb"), 1, GL_FALSE, decoding.matrix);
+  glUniform3fv(planes_program_.uniform("u_offset"), 1, decoding.offset);
+  const bool drawn = drawIntoTexture(planes_program_, error);
+  glActiveTexture(GL_TEXTURE0);
+  return drawn;
+}
+
+bool CameraFrameTexture::drawIntoTexture(const gles::Program& program, std::string& error) {
+  SavedTarget saved;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
+  glViewport(0, 0, width_px_, height_px_);
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_TEST);
+  quad_.draw(program.attribute("a_position"));
+  return gles::checkGl("camera frame conversion pass", error);
+}
+
+bool CameraFrameTexture::convertExternalImage(EGLImageKHR image, int width_px, int height_px, std::string& error) {
+  if (!image_target_texture_ || !external_program_.valid()) {
+    error = "CameraFrameTexture: external images are not available (" +
+            (dmabuf_import_problem_.empty() ? std::string("no GL_OES_EGL_image_external or dmabuf import")
+                                            : dmabuf_import_problem_) +
+            ")";
+    return false;
+  }
+  if (!checkSize(width_px, height_px, error) || !ensureRenderableTexture(width_px, height_px, error)) return false;
+  if (!external_texture_.valid()) external_texture_ = gles::Texture::create();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_EXTERNAL_OES, external_texture_.id());
+  glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  image_target_texture_(GL_TEXTURE_EXTERNAL_OES, static_cast<GLeglImageOES>(image));
+  if (!gles::checkGl("glEGLImageTargetTexture2DOES", error)) return false;
+  external_program_.use();
+  glUniform1i(external_program_.uniform("u_image"), 0);
+  const bool drawn = drawIntoTexture(external_program_, error);
+  glBindTexture(GL_TEXTURE_EXTERNAL_OES, 0);
+  return drawn;
+}
+
+bool CameraFrameTexture::importDmabuf(const YuvPlanes& planes, int width_px, int height_px, std::string& error) {
+  if (width_px != imported_width_px_ || height_px != imported_height_px_) forgetImportedBuffers();
+  imported_width_px_ = width_px;
+  imported_height_px_ = height_px;
+  EGLImageKHR image = EGL_NO_IMAGE_KHR;
+  for (const ImportedBuffer& imported : imported_)
+    if (planes.buffer_id != 0 && imported.buffer_id == planes.buffer_id) image = imported.image;
+  if (image == EGL_NO_IMAGE_KHR) {
+    const YcbcrEncoding& encoding = planes.encoding;
+    const EGLint color_space = encoding.matrix == YcbcrMatrix::kRec601   ? EGL_ITU_REC601_EXT
+                               : encoding.matrix == YcbcrMatrix::kRec709 ? EGL_ITU_REC709_EXT
+                                                                         : EGL_ITU_REC2020_EXT;
+    const EGLint attributes[] = {
+        EGL_WIDTH, width_px, EGL_HEIGHT, height_px, EGL_LINUX_DRM_FOURCC_EXT, kDrmFormatYuv420,
+        EGL_DMA_BUF_PLANE0_FD_EXT, planes.dmabuf_fd[0], EGL_DMA_BUF_PLANE0_OFFSET_EXT,
+        static_cast<EGLint>(planes.dmabuf_offset[0]), EGL_DMA_BUF_PLANE0_PITCH_EXT, planes.stride_bytes[0],
+        EGL_DMA_BUF_PLANE1_FD_EXT, planes.dmabuf_fd[1], EGL_DMA_BUF_PLANE1_OFFSET_EXT,
+        static_cast<EGLint>(planes.dmabuf_offset[1]), EGL_DMA_BUF_PLANE1_PITCH_EXT, planes.stride_bytes[1],
+        EGL_DMA_BUF_PLANE2_FD_EXT, planes.dmabuf_fd[2], EGL_DMA_BUF_PLANE2_OFFSET_EXT,
+        static_cast<EGLint>(planes.dmabuf_offset[2]), EGL_DMA_BUF_PLANE2_PITCH_EXT, planes.stride_bytes[2],
+        EGL_YUV_COLOR_SPACE_HINT_EXT, color_space, EGL_SAMPLE_RANGE_HINT_EXT,
+        encoding.full_range ? EGL_YUV_FULL_RANGE_EXT : EGL_YUV_NARROW_RANGE_EXT,
+        EGL_YUV_CHROMA_HORIZONTAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT,
+        EGL_YUV_CHROMA_VERTICAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT, EGL_NONE};
+    image = create_image_(display_, EGL_NO_CONTEXT, EGL_LINUX_DMA_BUF_EXT, nullptr, attributes);
+    if (image == EGL_NO_IMAGE_KHR) {
+      error = "eglCreateImageKHR refused the camera's YUV420 dmabuf (EGL error 0x" +
+              [] {
+                char text[16];
+                std::snprintf(text, sizeof text, "%04x", static_cast<unsigned>(eglGetError()));
+                return std::string(text);
+              }() +
+              "); using the upload path";
+      return false;
+    }
+    if (planes.buffer_id != 0) imported_.push_back(ImportedBuffer{planes.buffer_id, image});
+  }
+  const bool converted = convertExternalImage(image, width_px, height_px, error);
+  if (planes.buffer_id == 0) destroy_image_(display_, image);  // not a camera buffer: no reuse
+  return converted;
+}
+
+void CameraFrameTexture::forgetImportedBuffers() {
+  for (const ImportedBuffer& imported : imported_)
+    if (destroy_image_) destroy_image_(display_, imported.image);
+  imported_.clear();
 }
 
 }  // namespace probelight::pipeline

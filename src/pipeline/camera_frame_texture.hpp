@@ -1,33 +1,110 @@
 // Stage 1: the camera frame as a GL texture.
-// Input: ImageRGB8 (sRGB bytes). Output: an RGB 2D texture, LINEAR,
-// CLAMP_TO_EDGE, image row 0 at t = 0. An OpenCV pixel position p (pixel
-// centres at integers) is sampled at texcoord = (p + 0.5) / size.
+// Input: a FrameBuffer: sRGB bytes (simulated RGB, image files), or the
+// board camera's I420 planes. Output: one 2D texture of sRGB bytes, LINEAR,
+// CLAMP_TO_EDGE, image row 0 at t = 0, that every later stage samples. An
+// OpenCV pixel position p (pixel centres at integers) is sampled at
+// texcoord = (p + 0.5) / size.
+//
+// I420 frames take one of two paths to it:
+//  - dmabuf import (zero-copy): when the planes live in a camera dmabuf and
+//    EGL has EGL_EXT_image_dma_buf_import and GL has
+//    GL_OES_EGL_image_external, the buffer is imported once as an EGLImage
+//    (cached per camera buffer) with the stream's colour-space hints, and a
+//    pass samples it as samplerExternalOES into the RGB texture;
+//  - upload: the three planes as LUMINANCE textures, converted by a pass
+//    with the stream's matrix and range (core/ycbcr.hpp).
+// A failed import falls back to the upload path for good, said once.
 #pragma once
 
-#include <string>
+#include <EGL/egl.h>
+#include <EGL/eglext.h>
 
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "capture/frame_source.hpp"
 #include "core/types.hpp"
 #include "gles/capabilities.hpp"
 #include "gles/gl_objects.hpp"
 
 namespace probelight::pipeline {
 
+enum class FrameUploadPath { kNone, kRgbUpload, kYuvUpload, kDmabufImport };
+const char* toString(FrameUploadPath path);
+
 class CameraFrameTexture {
  public:
-  bool init(const gles::Capabilities& capabilities, std::string& error);
-  // Re-allocates only when the size changes; otherwise glTexSubImage2D.
+  CameraFrameTexture() = default;
+  ~CameraFrameTexture();
+  CameraFrameTexture(const CameraFrameTexture&) = delete;
+  CameraFrameTexture& operator=(const CameraFrameTexture&) = delete;
+
+  // Needs a current context. `allow_dmabuf_import` false keeps I420 frames
+  // on the upload path (configuration, or tests of that path).
+  bool init(const gles::Capabilities& capabilities, std::string& error, bool allow_dmabuf_import = true);
+  // Any frame: dispatches on its layout. Re-allocates only when the size or
+  // layout changes.
+  bool upload(const FrameBuffer& frame, std::string& error);
+  // An RGB image (glTexSubImage2D into an RGB texture).
   bool upload(const ImageRGB8& image, std::string& error);
+  // The external-image pass on its own, for an EGLImage imported elsewhere
+  // (tests feed it an EGLImage made from a GL texture: llvmpipe cannot
+  // import dmabufs, but samples external images the same way).
+  bool convertExternalImage(EGLImageKHR image, int width_px, int height_px, std::string& error);
 
   GLuint texture() const { return texture_.id(); }
   int widthPx() const { return width_px_; }
   int heightPx() const { return height_px_; }
   bool empty() const { return width_px_ == 0; }
+  // How the last frame got here.
+  FrameUploadPath lastPath() const { return last_path_; }
+  bool dmabufImportAvailable() const { return dmabuf_import_available_; }
+  // Why dmabuf import was given up (empty while it works or was never tried).
+  const std::string& dmabufImportProblem() const { return dmabuf_import_problem_; }
 
  private:
+  struct ImportedBuffer {
+    std::uint64_t buffer_id = 0;
+    EGLImageKHR image = EGL_NO_IMAGE_KHR;
+  };
+  bool checkSize(int width_px, int height_px, std::string& error) const;
+  bool ensureRenderableTexture(int width_px, int height_px, std::string& error);
+  bool uploadPlanes(const YuvPlanes& planes, int width_px, int height_px, std::string& error);
+  bool uploadPlane(gles::Texture& texture, int& allocated_width, int& allocated_height, const std::uint8_t* data,
+                   int stride_bytes, int width_px, int height_px, std::string& error);
+  // True when imported; false with `error` empty when the frame cannot be
+  // imported (no dmabuf), false with `error` set when an import failed.
+  bool importDmabuf(const YuvPlanes& planes, int width_px, int height_px, std::string& error);
+  void forgetImportedBuffers();
+  // Draws `program` over the whole output texture.
+  bool drawIntoTexture(const gles::Program& program, std::string& error);
+
   int max_texture_size_px_ = 0;
   int width_px_ = 0;
   int height_px_ = 0;
+  bool renderable_ = false;  // texture_ is RGBA with a framebuffer (the YUV paths)
   gles::Texture texture_;
+  gles::Framebuffer framebuffer_;
+  FrameUploadPath last_path_ = FrameUploadPath::kNone;
+
+  gles::Program planes_program_;
+  gles::Program external_program_;
+  gles::FullScreenQuad quad_;
+  gles::Texture planes_[3];
+  int plane_width_[3] = {0, 0, 0};
+  int plane_height_[3] = {0, 0, 0};
+  bool unpack_row_length_ = false;  // GL_EXT_unpack_subimage: strided rows in one call
+
+  bool dmabuf_import_available_ = false;
+  std::string dmabuf_import_problem_;
+  EGLDisplay display_ = EGL_NO_DISPLAY;
+  gles::Texture external_texture_;
+  std::vector<ImportedBuffer> imported_;
+  int imported_width_px_ = 0, imported_height_px_ = 0;
+  PFNEGLCREATEIMAGEKHRPROC create_image_ = nullptr;
+  PFNEGLDESTROYIMAGEKHRPROC destroy_image_ = nullptr;
+  PFNGLEGLIMAGETARGETTEXTURE2DOESPROC image_target_texture_ = nullptr;
 };
 
 }  // namespace probelight::pipeline

@@ -476,15 +476,4 @@ TagTrackResult TagTracker::track(const std::uint8_t* luma, int width, int height
   return result;
 }
 
-void rgbToLuma(const ImageRGB8& rgb, std::vector<std::uint8_t>& luma) {
-  if (rgb.empty() || rgb.pixels.size() < static_cast<std::size_t>(rgb.width) * static_cast<std::size_t>(rgb.height) * 3u) {
-    luma.clear();
-    return;
-  }
-  luma.resize(static_cast<std::size_t>(rgb.width) * static_cast<std::size_t>(rgb.height));
-  cv::Mat source(rgb.height, rgb.width, CV_8UC3, const_cast<std::uint8_t*>(rgb.pixels.data()));
-  cv::Mat destination(rgb.height, rgb.width, CV_8UC1, luma.data());
-  cv::cvtColor(source, destination, cv::COLOR_RGB2GRAY);
-}
-
 }  // namespace probelight::tracking

@@ -153,8 +153,4 @@ class TagTracker {
 // moved far.
 inline constexpr int kCutByEdgeMemoryFrames = 15;
 
-// BT.601 luma (OpenCV's RGB->GRAY weights), packed: stride = width. For the
-// sim and image sources, which give RGB; the libcamera source has a Y plane.
-void rgbToLuma(const ImageRGB8& rgb, std::vector<std::uint8_t>& luma);
-
 }  // namespace probelight::tracking

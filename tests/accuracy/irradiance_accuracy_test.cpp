@@ -105,7 +105,7 @@ TEST_F(IrradianceAccuracy, FourteenNormalsAcrossWorldsViewsAndFaceSizes) {
         truth_luminance.push_back(luminance(world.irradiance(normal, 0).clipped));
 
       std::vector<std::uint8_t> luma;
-      tracking::rgbToLuma(frame, luma);
+      lumaFromRgb(frame, luma);
       tracking::TagTracker tracker(tracking::TagDetectorSettings{}, scene.rig, scene.camera);
       const tracking::TagTrackResult track = tracker.track(luma.data(), frame.width, frame.height, frame.width);
       ASSERT_TRUE(track.found) << environment << " " << view.name << ": " << track.status;

@@ -127,7 +127,7 @@ TEST_F(ShadowAccuracy, GroundAttenuationAgainstTheTruthAndTheDominantLightAgains
     ASSERT_TRUE(truth.probe_fully_visible && truth.tag_fully_visible) << world_case.name;
 
     std::vector<std::uint8_t> luma;
-    tracking::rgbToLuma(frame, luma);
+    lumaFromRgb(frame, luma);
     tracking::TagDetectorSettings detector;
     tracking::TagTracker tracker(detector, scene.rig, scene.camera);
     const tracking::TagTrackResult track = tracker.track(luma.data(), frame.width, frame.height, frame.width);

@@ -23,6 +23,13 @@ struct CommandResult {
   std::string stderr_text;
 };
 
+// How often `needle` occurs in `text` ("said once" checks).
+inline std::size_t countOccurrences(const std::string& text, const std::string& needle) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++count;
+  return count;
+}
+
 // A test with its own scratch folder, /tmp/probelight_<prefix>_<pid>_<test>.
 // It is removed after a passing test and kept after a failing one, or always
 // with PROBELIGHT_KEEP_TEST_DIRS=1 (README's example pictures were made so).

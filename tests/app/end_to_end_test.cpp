@@ -253,11 +253,7 @@ TEST_F(EndToEnd, GpioButtonWithoutAChipWarnsOnceAndRuns) {
   const fs::path out = dir_ / "out";
   const CommandResult result = run("run --frames 3 --save-every 0 --button gpio --out " + out.string());
   ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
-  std::size_t warnings = 0;
-  for (std::size_t at = result.stderr_text.find("warning: button:"); at != std::string::npos;
-       at = result.stderr_text.find("warning: button:", at + 1))
-    ++warnings;
-  EXPECT_EQ(warnings, 1u) << result.stderr_text;
+  EXPECT_EQ(testing::countOccurrences(result.stderr_text, "warning: button:"), 1u) << result.stderr_text;
   EXPECT_NE(result.stderr_text.find("running without a button"), std::string::npos) << result.stderr_text;
   const nlohmann::json report = readReport(out);
   EXPECT_EQ(report["frames"], 3);

@@ -89,7 +89,7 @@ Errors measure(const sim::SceneConfig& scene, const std::vector<FrameSample>& fr
   for (const FrameSample& frame : frames) {
     // A fresh tracker per frame: these views are unrelated, so no history.
     tracking::TagTracker tracker(settings, scene.rig, scene.camera);
-    tracking::rgbToLuma(frame.image, luma);
+    lumaFromRgb(frame.image, luma);
     auto start = std::chrono::steady_clock::now();
     tracking::TagTrackResult result = tracker.track(luma.data(), frame.image.width, frame.image.height, frame.image.width);
     errors.track_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
@@ -234,7 +234,7 @@ TEST(PoseAccuracy, SlowNearFrontoParallelPathNeverFlips) {
     ImageRGB8 image;
     FrameTruth truth;
     world.render(static_cast<std::uint64_t>(frame), image, truth);
-    tracking::rgbToLuma(image, luma);
+    lumaFromRgb(image, luma);
     tracking::TagTrackResult result = tracker.track(luma.data(), image.width, image.height, image.width);
     ASSERT_TRUE(result.found) << "frame " << frame << ": " << result.status;
     double error = tracking::rotationDifferenceDeg(result.pose.R_cam_from_world, truth.pose.R_cam_from_world);

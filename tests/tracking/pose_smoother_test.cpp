@@ -141,7 +141,7 @@ void trackSequence(const std::string& path, int frames, int skip, Series& raw, S
     ImageRGB8 image;
     FrameTruth truth;
     world.render(static_cast<std::uint64_t>(frame), image, truth);
-    tracking::rgbToLuma(image, luma);
+    lumaFromRgb(image, luma);
     tracking::TagTrackResult result = tracker.track(luma.data(), image.width, image.height, image.width);
     ASSERT_TRUE(result.found) << path << " frame " << frame << ": " << result.status;
     PoseCamFromWorld filtered = smoother.update(result.pose, frame * kFrameS);

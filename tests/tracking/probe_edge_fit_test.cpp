@@ -39,7 +39,7 @@ TEST(ProbeEdgeFit, FindsTheTrueOutlineWhenTheRigIsMeasuredWrong) {
       world.render(frame, image, truth);
       if (!truth.probe_fully_visible) continue;
       std::vector<std::uint8_t> luma;
-      tracking::rgbToLuma(image, luma);
+      lumaFromRgb(image, luma);
       // The true pose, so that what is measured is the fit, not the tracker.
       const ibl::ProbeOutline predicted = ibl::computeProbeOutline(ibl::MirrorBallView{
           scene.camera, truth.pose, scene.rig.probe_center_w + c.centre_error_m, scene.rig.probe_radius_m + c.radius_error_m});

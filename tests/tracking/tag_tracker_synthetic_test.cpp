@@ -370,7 +370,7 @@ TEST(RgbToLuma, UsesRec601WeightsInRgbOrder) {
   for (int x = 0; x < 3; ++x)
     for (int c = 0; c < 3; ++c) rgb.pixels[static_cast<size_t>(x * 3 + c)] = colours[x][c];
   std::vector<std::uint8_t> luma;
-  tracking::rgbToLuma(rgb, luma);
+  lumaFromRgb(rgb, luma);
   ASSERT_EQ(luma.size(), 3u);
   // Y = 0.299 R + 0.587 G + 0.114 B, rounded to 8 bits (+-1 for fixed-point
   // rounding). Swapped R and B would give 29 for red.
@@ -378,7 +378,7 @@ TEST(RgbToLuma, UsesRec601WeightsInRgbOrder) {
   EXPECT_NEAR(luma[1], 0.587 * 255, 1.0);
   EXPECT_NEAR(luma[2], 0.114 * 255, 1.0);
   ImageRGB8 empty;
-  tracking::rgbToLuma(empty, luma);
+  lumaFromRgb(empty, luma);
   EXPECT_TRUE(luma.empty());
 }
 
@@ -515,7 +515,7 @@ SimFrame renderSimFrame(const sim::World& world, std::uint64_t index) {
   SimFrame frame;
   ImageRGB8 image;
   world.render(index, image, frame.truth);
-  tracking::rgbToLuma(image, frame.luma);
+  lumaFromRgb(image, frame.luma);
   frame.width = image.width;
   frame.height = image.height;
   return frame;

@@ -1,0 +1,20 @@
+#include "core/types.hpp"
+
+namespace probelight {
+
+void lumaFromRgb(const ImageRGB8& rgb, std::vector<std::uint8_t>& luma) {
+  const std::size_t pixel_count = static_cast<std::size_t>(rgb.width) * static_cast<std::size_t>(rgb.height);
+  if (rgb.empty() || rgb.pixels.size() < pixel_count * 3u) {
+    luma.clear();
+    return;
+  }
+  luma.resize(pixel_count);
+  // 0.299, 0.587, 0.114 in 14-bit fixed point, rounded: OpenCV's RGB2GRAY.
+  constexpr std::uint32_t kR = 4899, kG = 9617, kB = 1868, kHalf = 1u << 13;
+  const std::uint8_t* in = rgb.pixels.data();
+  std::uint8_t* out = luma.data();
+  for (std::size_t i = 0; i < pixel_count; ++i, in += 3)
+    out[i] = static_cast<std::uint8_t>((kR * in[0] + kG * in[1] + kB * in[2] + kHalf) >> 14);
+}
+
+}  // namespace probelight

@@ -1,0 +1,18 @@
+// The simulated camera's ISP output format: what libcamera's YUV420 stream
+// gives on the board with the sYCC colour space (JPEG's full-range Rec601
+// Y'CbCr), chroma averaged over each 2x2 block (centre-sited). Written from
+// the standard's forward equations on its own, so a mistake in the
+// pipeline's decoder (core/ycbcr) cannot cancel against it.
+#pragma once
+
+#include <cstdint>
+
+#include "core/types.hpp"
+
+namespace probelight::sim {
+
+// Planes of ceil(w/2) x ceil(h/2) chroma; strides in bytes.
+void encodeI420Sycc(const ImageRGB8& rgb, std::uint8_t* y_plane, int y_stride, std::uint8_t* cb_plane,
+                    std::uint8_t* cr_plane, int chroma_stride);
+
+}  // namespace probelight::sim

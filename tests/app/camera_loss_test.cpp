@@ -1,0 +1,132 @@
+// The board camera's behaviour, through the real binary with the simulated
+// camera standing in: I420 frames (Y'-plane detection, GPU conversion), a
+// camera that disappears mid-run and comes back, and the exposure lock
+// during recalibration. Plus the reconnect schedule on its own.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "app/reconnect_backoff.hpp"
+#include "binary_test_support.hpp"
+
+namespace probelight {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(ReconnectBackoff, WaitsDoubleUpToTheMaximumAndStartOverAfterAReconnect) {
+  ReconnectBackoff backoff(0.5, 4.0);
+  EXPECT_FALSE(backoff.lost());
+  EXPECT_FALSE(backoff.due(100.0));
+  backoff.onLost(10.0);
+  EXPECT_FALSE(backoff.due(10.49));
+  EXPECT_TRUE(backoff.due(10.5));
+  // Each failure doubles the wait: 1, 2, 4, then stays at the maximum 4.
+  double now = 10.5;
+  for (const double expected_wait : {1.0, 2.0, 4.0, 4.0, 4.0}) {
+    backoff.onAttemptFailed(now);
+    EXPECT_DOUBLE_EQ(backoff.nextAttemptS() - now, expected_wait);
+    EXPECT_FALSE(backoff.due(now + expected_wait - 0.01));
+    now += expected_wait;
+    EXPECT_TRUE(backoff.due(now));
+  }
+  EXPECT_EQ(backoff.failedAttempts(), 5);
+  // A second loss report while lost keeps the first one's clock.
+  backoff.onLost(now);
+  EXPECT_DOUBLE_EQ(backoff.lostSinceS(), 10.0);
+  backoff.onReconnected();
+  EXPECT_FALSE(backoff.lost());
+  backoff.onLost(50.0);
+  EXPECT_EQ(backoff.failedAttempts(), 0);
+  EXPECT_DOUBLE_EQ(backoff.nextAttemptS(), 50.5);
+}
+
+class CameraRun : public testing::BinaryTest {
+ protected:
+  CameraRun() : BinaryTest("camera") {}
+
+  // `run` on the simulated camera with `config_body` as probelight.yaml.
+  testing::CommandResult runSim(const std::string& name, const std::string& config_body, int frames) {
+    const fs::path config = dir_ / (name + ".yaml");
+    std::ofstream(config) << "%YAML:1.0\n---\noutput:\n  save_every: 0\n" << config_body;
+    return run("run --source sim --display headless --frames " + std::to_string(frames) + " --config " +
+               config.string() + " --out " + (dir_ / name).string());
+  }
+};
+
+// The board's camera gives I420; tag detection reads its Y' plane in place
+// and the GPU converts the planes. Tracking and the maps must be as good as
+// from RGB frames: the limits are issue 4's pose and ball targets, and the
+// diffuse map within 1% of the RGB run's error (4:2:0 halves the chroma
+// resolution of a ~30 px ball; irradiance integrates it away).
+TEST_F(CameraRun, I420FramesTrackAndLightAsWellAsRgbFrames) {
+  const testing::CommandResult rgb = runSim("rgb", "", 30);
+  const testing::CommandResult yuv = runSim("yuv", "sim:\n  pixel_format: yuv420\n", 30);
+  ASSERT_EQ(rgb.exit_status, 0) << rgb.stderr_text;
+  ASSERT_EQ(yuv.exit_status, 0) << yuv.stderr_text;
+  const nlohmann::json rgb_report = readReport(dir_ / "rgb");
+  const nlohmann::json yuv_report = readReport(dir_ / "yuv");
+  EXPECT_EQ(rgb_report["camera"]["frame_upload"], "rgb upload");
+  EXPECT_EQ(yuv_report["camera"]["frame_upload"], "yuv upload");
+  EXPECT_EQ(yuv_report["tag_status"]["frames"]["found"], 30);
+  const nlohmann::json& accuracy = yuv_report["accuracy"];
+  EXPECT_LE(accuracy["pose_rotation_error_deg"].get<double>(), 0.3);
+  EXPECT_LE(accuracy["pose_translation_error_pct"].get<double>(), 0.5);
+  EXPECT_LE(accuracy["probe_center_error_px"].get<double>(), 0.5);
+  EXPECT_LE(accuracy["probe_radius_error_px"].get<double>(), 0.5);
+  EXPECT_LE(accuracy["diffuse_irradiance_rel_error_vs_clipped"].get<double>(),
+            rgb_report["accuracy"]["diffuse_irradiance_rel_error_vs_clipped"].get<double>() + 0.01);
+  // The simulated camera's fixed exposure is recorded, and the start-up
+  // calibration (inside the first 30 frames, while AE would still be
+  // converging) does not lock it.
+  EXPECT_EQ(yuv_report["camera"]["exposure_us"]["median"], 10000.0);
+  EXPECT_EQ(yuv_report["camera"]["analogue_gain"]["median"], 1.0);
+  EXPECT_EQ(yuv_report["camera"]["exposure_locks"], 0);
+  EXPECT_EQ(yuv_report["camera"]["exposure_at_last_fit"]["locked"], false);
+}
+
+// The camera disappears at frame 12 and the first two reconnects fail: the
+// last frame stays with a message, reconnects follow the back-off
+// (0.5 s, 1 s, 2 s), and the run then carries on tracking to its end.
+TEST_F(CameraRun, ALostCameraIsReconnectedWithBackoffAndTheRunGoesOn) {
+  const testing::CommandResult result =
+      runSim("lost", "sim:\n  pixel_format: yuv420\n  camera_lost_at_frame: 12\n  camera_lost_restarts: 2\n", 24);
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find("disconnected; keeping the last frame and reconnecting"), std::string::npos)
+      << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find("reconnect failed: camera: sim camera unplugged"), std::string::npos);
+  EXPECT_NE(result.stderr_text.find("is back after 3 attempt(s)"), std::string::npos) << result.stderr_text;
+  const nlohmann::json report = readReport(dir_ / "lost");
+  EXPECT_EQ(report["frames"], 24);
+  EXPECT_EQ(report["camera"]["losses"], 1);
+  EXPECT_EQ(report["camera"]["reconnect_failures"], 2);
+  EXPECT_EQ(report["camera"]["reconnects"], 1);
+  // The three waits add up to 3.5 s before the camera is back.
+  EXPECT_GE(report["elapsed_s"].get<double>(), 3.5);
+  EXPECT_EQ(report["tag_status"]["frames"]["found"], 24);
+  EXPECT_GT(report["counters"]["frames_with_status"].get<long long>(), 0) << "the message was drawn";
+  EXPECT_EQ(report["state_at_end"], "running");
+}
+
+// With the settle time at 0, every recalibration (here the start-up one)
+// freezes exposure while the lights are fitted and releases it after.
+TEST_F(CameraRun, ExposureIsLockedWhileTheLightsAreFitted) {
+  const testing::CommandResult result = runSim("lock", "camera:\n  exposure_settle_frames: 0\n", 12);
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(dir_ / "lock");
+  EXPECT_EQ(report["counters"]["exposure_locks"], 1);
+  EXPECT_EQ(report["counters"]["exposure_unlocks"], 1);
+  EXPECT_EQ(report["camera"]["exposure_at_last_fit"]["locked"], true);
+  EXPECT_EQ(report["camera"]["exposure_at_last_fit"]["exposure_us"], 10000.0);
+  const testing::CommandResult off =
+      runSim("nolock", "camera:\n  exposure_settle_frames: 0\n  lock_exposure: false\n", 12);
+  ASSERT_EQ(off.exit_status, 0) << off.stderr_text;
+  EXPECT_EQ(readReport(dir_ / "nolock")["camera"]["exposure_locks"], 0);
+}
+
+}  // namespace
+}  // namespace probelight

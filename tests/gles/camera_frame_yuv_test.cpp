@@ -1,0 +1,232 @@
+// Stage 1 for the board camera's I420 frames: the GPU conversion (planes
+// uploaded, or an imported external image) against the RGB the frame was
+// made from. The I420 frames come from the simulator's own encoder
+// (sim/camera_ycbcr), written apart from the decoder in core/ycbcr.
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include <EGL/egl.h>
+#include <EGL/eglext.h>
+#include <gtest/gtest.h>
+
+#include "capture/frame_source.hpp"
+#include "core/ycbcr.hpp"
+#include "gles_test_support.hpp"
+#include "pipeline/camera_frame_texture.hpp"
+#include "sim/camera_ycbcr.hpp"
+
+namespace probelight {
+namespace {
+
+using test::GpuTest;
+
+// Patches of random colours, 2x2-aligned, so that 4:2:0 chroma averaging
+// loses nothing and the only differences are the codes' rounding.
+ImageRGB8 flatPatchImage(int width, int height, int patch_px, unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_int_distribution<int> code(0, 255);
+  const int columns = (width + patch_px - 1) / patch_px, rows = (height + patch_px - 1) / patch_px;
+  std::vector<std::uint8_t> colours(static_cast<std::size_t>(columns * rows * 3));
+  for (auto& c : colours) c = static_cast<std::uint8_t>(code(random));
+  ImageRGB8 image;
+  image.resize(width, height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < 3; ++c)
+        image.row(y)[3 * x + c] = colours[static_cast<std::size_t>(((y / patch_px) * columns + x / patch_px) * 3 + c)];
+  return image;
+}
+
+FrameBuffer i420Frame(const ImageRGB8& image) {
+  FrameBuffer frame;
+  YuvPlanes& planes = frame.allocateI420(image.width, image.height, YcbcrEncoding{YcbcrMatrix::kRec601, true});
+  sim::encodeI420Sycc(image, const_cast<std::uint8_t*>(planes.data[0]), planes.stride_bytes[0],
+                      const_cast<std::uint8_t*>(planes.data[1]), const_cast<std::uint8_t*>(planes.data[2]),
+                      planes.stride_bytes[1]);
+  return frame;
+}
+
+// The frame texture's bytes, row 0 first (as stored).
+ImageRGB8 readTexture(GLuint texture, int width, int height) {
+  GLuint framebuffer = 0;
+  glGenFramebuffers(1, &framebuffer);
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture, 0);
+  std::vector<std::uint8_t> rgba(static_cast<std::size_t>(width * height * 4));
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glDeleteFramebuffers(1, &framebuffer);
+  ImageRGB8 image;
+  image.resize(width, height);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(width * height); ++i)
+    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = rgba[4 * i + c];
+  return image;
+}
+
+int maxDifference(const ImageRGB8& a, const ImageRGB8& b) {
+  int worst = 0;
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) worst = std::max(worst, std::abs(a.pixels[i] - b.pixels[i]));
+  return worst;
+}
+
+// Same, over the pixels at least one pixel inside their patch: chroma is
+// reconstructed by linear interpolation between block centres (what
+// GL_LINEAR and the external sampler's 0.5 siting do), which blends
+// neighbouring patches' colours across the one pixel next to each border.
+int maxDifferenceInsidePatches(const ImageRGB8& a, const ImageRGB8& b, int patch_px) {
+  int worst = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      const int px = x % patch_px, py = y % patch_px;
+      if (px == 0 || px == patch_px - 1 || py == 0 || py == patch_px - 1 || x == a.width - 1 || y == a.height - 1)
+        continue;
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(a.row(y)[3 * x + c] - b.row(y)[3 * x + c]));
+    }
+  return worst;
+}
+
+// Rounding the three codes to integers moves R'G'B' by at most
+// 0.5 * (1 + max row sum of |Cb|,|Cr| coefficients) = 0.5 * (1 + 1.772) ~ 1.4
+// codes (blue), and the 8-bit output rounds by another 0.5: 2 codes.
+constexpr int kRoundingTolerance = 2;
+
+TEST_F(GpuTest, I420PlanesConvertToTheRgbTheyCameFrom) {
+  const ImageRGB8 image = flatPatchImage(640, 480, 8, 7);
+  const FrameBuffer frame = i420Frame(image);
+  pipeline::CameraFrameTexture texture;
+  std::string error;
+  ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
+  ASSERT_TRUE(texture.upload(frame, error)) << error;
+  EXPECT_EQ(texture.lastPath(), pipeline::FrameUploadPath::kYuvUpload);
+  EXPECT_LE(maxDifferenceInsidePatches(readTexture(texture.texture(), 640, 480), image, 8), kRoundingTolerance);
+}
+
+TEST_F(GpuTest, I420ConversionHoldsOnThePlain8BitPathAndForOddSizes) {
+  // Without extensions (no GL_EXT_unpack_subimage: strided rows one by one),
+  // with padded rows, and a size whose chroma planes are rounded up.
+  const ImageRGB8 image = flatPatchImage(101, 37, 4, 11);
+  FrameBuffer tight = i420Frame(image);
+  // The same planes with 64 bytes of padding per row, as cameras allocate.
+  std::vector<std::uint8_t> padded;
+  FrameBuffer strided = tight;
+  int offsets[3] = {0, 0, 0};
+  const int widths[3] = {101, 51, 51}, heights[3] = {37, 19, 19};
+  for (int p = 0; p < 3; ++p) {
+    offsets[p] = static_cast<int>(padded.size());
+    padded.resize(padded.size() + static_cast<std::size_t>((widths[p] + 64) * heights[p]), 0xAB);
+  }
+  for (int p = 0; p < 3; ++p)
+    for (int row = 0; row < heights[p]; ++row)
+      std::copy_n(tight.yuv.data[p] + row * tight.yuv.stride_bytes[p], widths[p],
+                  padded.begin() + offsets[p] + row * (widths[p] + 64));
+  for (int p = 0; p < 3; ++p) {
+    strided.yuv.data[p] = padded.data() + offsets[p];
+    strided.yuv.stride_bytes[p] = widths[p] + 64;
+  }
+  std::string error;
+  for (const bool plain : {false, true}) {
+    SCOPED_TRACE(plain ? "extensions masked" : "all extensions");
+    const gles::Capabilities caps =
+        plain ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
+    pipeline::CameraFrameTexture texture;
+    ASSERT_TRUE(texture.init(caps, error)) << error;
+    ASSERT_TRUE(texture.upload(tight, error)) << error;
+    const ImageRGB8 from_tight = readTexture(texture.texture(), 101, 37);
+    EXPECT_LE(maxDifferenceInsidePatches(from_tight, image, 4), kRoundingTolerance);
+    ASSERT_TRUE(texture.upload(strided, error)) << error;
+    EXPECT_EQ(maxDifference(readTexture(texture.texture(), 101, 37), from_tight), 0) << "padding leaked in";
+  }
+}
+
+TEST_F(GpuTest, YcbcrDecodingInvertsEachStandardsForwardEquations) {
+  // Forward equations of each standard (Kr, Kb) and range, as a camera's ISP
+  // applies them; the decoder must undo them to within float rounding.
+  struct Case { YcbcrMatrix matrix; double kr, kb; bool full; };
+  const Case cases[] = {{YcbcrMatrix::kRec601, 0.299, 0.114, true},   {YcbcrMatrix::kRec601, 0.299, 0.114, false},
+                        {YcbcrMatrix::kRec709, 0.2126, 0.0722, true}, {YcbcrMatrix::kRec709, 0.2126, 0.0722, false},
+                        {YcbcrMatrix::kRec2020, 0.2627, 0.0593, false}};
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const Case& c : cases) {
+    const YcbcrDecoding decoding = ycbcrDecoding(YcbcrEncoding{c.matrix, c.full});
+    for (int trial = 0; trial < 200; ++trial) {
+      const double r = unit(random), g = unit(random), b = unit(random);
+      const double y = c.kr * r + (1.0 - c.kr - c.kb) * g + c.kb * b;
+      const double cb = (b - y) / (2.0 * (1.0 - c.kb)), cr = (r - y) / (2.0 * (1.0 - c.kr));
+      const double code[3] = {c.full ? y : (16.0 + 219.0 * y) / 255.0,
+                              c.full ? cb + 128.0 / 255.0 : (128.0 + 224.0 * cb) / 255.0,
+                              c.full ? cr + 128.0 / 255.0 : (128.0 + 224.0 * cr) / 255.0};
+      const double expected[3] = {r, g, b};
+      for (int row = 0; row < 3; ++row) {
+        double value = decoding.offset[row];
+        for (int column = 0; column < 3; ++column) value += decoding.matrix[column * 3 + row] * code[column];
+        EXPECT_NEAR(value, expected[row], 1e-5) << YcbcrEncoding{c.matrix, c.full}.describe();
+      }
+    }
+  }
+}
+
+// The zero-copy path's second half: an EGLImage sampled through
+// samplerExternalOES into the frame texture. llvmpipe cannot import
+// dmabufs, so the EGLImage here comes from a GL texture
+// (EGL_KHR_gl_texture_2D_image): the same binding and shader a camera
+// buffer goes through.
+TEST_F(GpuTest, ExternalImagesAreCopiedIntoTheFrameTextureUnchanged) {
+  const gles::Capabilities& caps = test::sharedCapabilities();
+  const EGLDisplay display = eglGetCurrentDisplay();
+  const char* egl_extensions = eglQueryString(display, EGL_EXTENSIONS);
+  if (!caps.egl_image_external || !egl_extensions || !std::strstr(egl_extensions, "EGL_KHR_gl_texture_2D_image"))
+    GTEST_SKIP() << "this GL has no external images to test with";
+  // Pretend dmabuf import exists, so that the external program is built.
+  gles::Capabilities with_import = caps;
+  with_import.egl_dmabuf_import = true;
+  pipeline::CameraFrameTexture texture;
+  std::string error;
+  ASSERT_TRUE(texture.init(with_import, error)) << error;
+  ASSERT_TRUE(texture.dmabufImportAvailable()) << texture.dmabufImportProblem();
+
+  const ImageRGB8 image = flatPatchImage(96, 64, 1, 5);
+  std::vector<std::uint8_t> rgba(96 * 64 * 4, 255);
+  for (std::size_t i = 0; i < 96 * 64; ++i)
+    for (int c = 0; c < 3; ++c) rgba[4 * i + c] = image.pixels[3 * i + c];
+  GLuint source = 0;
+  glGenTextures(1, &source);
+  glBindTexture(GL_TEXTURE_2D, source);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, 96, 64, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  auto create_image = reinterpret_cast<PFNEGLCREATEIMAGEKHRPROC>(eglGetProcAddress("eglCreateImageKHR"));
+  auto destroy_image = reinterpret_cast<PFNEGLDESTROYIMAGEKHRPROC>(eglGetProcAddress("eglDestroyImageKHR"));
+  const EGLint attributes[] = {EGL_GL_TEXTURE_LEVEL_KHR, 0, EGL_NONE};
+  const EGLImageKHR image_handle = create_image(display, eglGetCurrentContext(), EGL_GL_TEXTURE_2D_KHR,
+                                                reinterpret_cast<EGLClientBuffer>(static_cast<std::uintptr_t>(source)),
+                                                attributes);
+  ASSERT_NE(image_handle, EGL_NO_IMAGE_KHR) << "eglCreateImageKHR: 0x" << std::hex << eglGetError();
+  ASSERT_TRUE(texture.convertExternalImage(image_handle, 96, 64, error)) << error;
+  // Texel centres sampled exactly: bytes in, bytes out.
+  EXPECT_LE(maxDifference(readTexture(texture.texture(), 96, 64), image), 1);
+  destroy_image(display, image_handle);
+  glDeleteTextures(1, &source);
+}
+
+TEST_F(GpuTest, BrokenI420FramesAreRefusedWithAReason) {
+  pipeline::CameraFrameTexture texture;
+  std::string error;
+  ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
+  FrameBuffer frame = i420Frame(flatPatchImage(64, 48, 2, 1));
+  frame.yuv.data[2] = nullptr;
+  EXPECT_FALSE(texture.upload(frame, error));
+  EXPECT_NE(error.find("planes"), std::string::npos) << error;
+  frame = i420Frame(flatPatchImage(64, 48, 2, 1));
+  frame.yuv.stride_bytes[0] = 10;  // shorter than a row
+  EXPECT_FALSE(texture.upload(frame, error));
+  EXPECT_NE(error.find("stride"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace probelight
