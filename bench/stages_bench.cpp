@@ -27,7 +27,7 @@
 #include <benchmark/benchmark.h>
 #include <glm/glm.hpp>
 
-#include "capture/frame_source.hpp"
+#include "capture/sim_frame_source.hpp"
 #include "core/types.hpp"
 #include "core/ycbcr.hpp"
 #include "gles/capabilities.hpp"
@@ -47,7 +47,6 @@
 #include "pipeline/environment_maps.hpp"
 #include "pipeline/ground_shadow.hpp"
 #include "pipeline/object_compositor.hpp"
-#include "sim/camera_ycbcr.hpp"
 #include "sim/occluder.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
@@ -756,10 +755,7 @@ void uploadI420Frame(benchmark::State& state) {
   std::vector<FrameBuffer> frames(s.frames.size());
   for (size_t i = 0; i < frames.size(); ++i) {
     const ImageRGB8& rgb = s.frames[i].rgb;
-    YuvPlanes& planes = frames[i].allocateI420(rgb.width, rgb.height, YcbcrEncoding{YcbcrMatrix::kRec601, true});
-    sim::encodeI420Sycc(rgb, const_cast<std::uint8_t*>(planes.data[0]), planes.stride_bytes[0],
-                        const_cast<std::uint8_t*>(planes.data[1]), const_cast<std::uint8_t*>(planes.data[2]),
-                        planes.stride_bytes[1]);
+    encodeSimFrame(rgb, PixelLayout::kI420, frames[i]);
   }
   pipeline::CameraFrameTexture texture;
   std::string error;

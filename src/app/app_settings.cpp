@@ -144,6 +144,8 @@ AppSettings loadAppSettings(const std::string& path) {
 
   ConfigReader camera_section = file.section("camera");
   settings.camera.id = camera_section.readString("id", settings.camera.id);
+  settings.camera.pixel_format =
+      camera_section.readString("pixel_format", settings.camera.pixel_format, {"yuv420", "nv12"});
   settings.camera.lock_exposure = camera_section.readBool("lock_exposure", settings.camera.lock_exposure);
   settings.camera.exposure_settle_frames =
       camera_section.readInt("exposure_settle_frames", settings.camera.exposure_settle_frames, Range::closed(0, 10000));
@@ -181,7 +183,7 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.lamp_on_frame = sim.readInt("lamp_on_frame", settings.sim.lamp_on_frame, Range::atLeast(-1));
   settings.sim.lamp_off_frame = sim.readInt("lamp_off_frame", settings.sim.lamp_off_frame, Range::atLeast(-1));
   settings.sim.ball_offset_m = sim.readVec3("ball_offset", settings.sim.ball_offset_m, Range::closed(-0.1, 0.1));
-  settings.sim.pixel_format = sim.readString("pixel_format", settings.sim.pixel_format, {"rgb", "yuv420"});
+  settings.sim.pixel_format = sim.readString("pixel_format", settings.sim.pixel_format, {"rgb", "yuv420", "nv12"});
   settings.sim.camera_lost_at_frame =
       sim.readInt("camera_lost_at_frame", settings.sim.camera_lost_at_frame, Range::atLeast(-1));
   settings.sim.camera_lost_restarts =

@@ -92,9 +92,9 @@ struct SimConfig {
   // Where the simulated ball really sits relative to rig.yaml's probe_center
   // (metres, W): a rig measured wrong, for testing probe_refinement.
   glm::dvec3 ball_offset_m{0.0};
-  // "rgb", or "yuv420": frames come as the board's camera gives them (I420,
-  // full-range Rec601), so the Y'-plane detection and the GPU YUV conversion
-  // run as on the board.
+  // "rgb", or "yuv420" / "nv12": frames come as the board's camera gives
+  // them (full-range Rec601), so the Y'-plane detection and the GPU YUV
+  // conversion run as on the board.
   std::string pixel_format = "rgb";
   // The camera disappearing mid-run (for testing the reconnect): frame N
   // fails, then the first `camera_lost_restarts` reconnects fail too.
@@ -110,6 +110,7 @@ struct ButtonConfig {
 // The board's camera (--source libcamera); its size is camera.yaml's.
 struct CameraConfig {
   std::string id;  // libcamera's camera id; empty: the first camera
+  std::string pixel_format = "yuv420";  // or "nv12"
   // Freeze auto exposure and white balance while the lights are fitted, so
   // that every frame of a recalibration sees the ball alike. Not during the
   // first `exposure_settle_frames` after the camera starts (AE is still

@@ -300,6 +300,7 @@ class Kiosk {
       camera.camera_id = settings.camera.id;
       camera.width_px = inputs_.camera.width_px;  // the calibrated size
       camera.height_px = inputs_.camera.height_px;
+      camera.layout = settings.camera.pixel_format == "nv12" ? PixelLayout::kNv12 : PixelLayout::kI420;
       source_ = std::make_unique<LibcameraSource>(camera);
       return 0;
     }
@@ -325,7 +326,9 @@ class Kiosk {
       return fail(2, error.what());
     }
     SimCameraOptions camera_options;
-    camera_options.layout = settings.sim.pixel_format == "yuv420" ? PixelLayout::kI420 : PixelLayout::kRgb8;
+    camera_options.layout = settings.sim.pixel_format == "yuv420" ? PixelLayout::kI420
+                            : settings.sim.pixel_format == "nv12" ? PixelLayout::kNv12
+                                                                  : PixelLayout::kRgb8;
     camera_options.lost_at_frame = settings.sim.camera_lost_at_frame;
     camera_options.failed_restarts = settings.sim.camera_lost_restarts;
     source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), 3, camera_options);

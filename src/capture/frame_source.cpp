@@ -2,8 +2,14 @@
 
 namespace probelight {
 
+int planeCount(PixelLayout layout) {
+  return layout == PixelLayout::kI420 ? 3 : layout == PixelLayout::kNv12 ? 2 : 1;
+}
+
+bool isYuv(PixelLayout layout) { return layout == PixelLayout::kI420 || layout == PixelLayout::kNv12; }
+
 LumaView FrameBuffer::luma() const {
-  if (layout == PixelLayout::kI420) return LumaView{yuv.data[0], width_px, height_px, yuv.stride_bytes[0]};
+  if (isYuv(layout)) return LumaView{yuv.data[0], width_px, height_px, yuv.stride_bytes[0]};
   return LumaView{luma_storage.data(), width_px, height_px, width_px};
 }
 
@@ -15,8 +21,8 @@ void FrameBuffer::finishRgb() {
   yuv = YuvPlanes{};
 }
 
-YuvPlanes& FrameBuffer::allocateI420(int width, int height, const YcbcrEncoding& encoding) {
-  layout = PixelLayout::kI420;
+YuvPlanes& FrameBuffer::allocateYuv420(PixelLayout yuv_layout, int width, int height, const YcbcrEncoding& encoding) {
+  layout = yuv_layout == PixelLayout::kNv12 ? PixelLayout::kNv12 : PixelLayout::kI420;
   width_px = width;
   height_px = height;
   const int chroma_width = (width + 1) / 2, chroma_height = (height + 1) / 2;
@@ -30,6 +36,11 @@ YuvPlanes& FrameBuffer::allocateI420(int width, int height, const YcbcrEncoding&
   yuv.data[2] = yuv_storage.data() + luma_bytes + chroma_bytes;
   yuv.stride_bytes[0] = width;
   yuv.stride_bytes[1] = yuv.stride_bytes[2] = chroma_width;
+  if (layout == PixelLayout::kNv12) {  // one plane of Cb Cr pairs, same bytes
+    yuv.stride_bytes[1] = 2 * chroma_width;
+    yuv.data[2] = nullptr;
+    yuv.stride_bytes[2] = 0;
+  }
   rgb = ImageRGB8{};
   luma_storage.clear();
   return yuv;

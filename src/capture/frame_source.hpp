@@ -31,13 +31,15 @@ struct FrameMetadata {
 
 enum class PixelLayout {
   kRgb8,  // `rgb`: 3 bytes per pixel (simulated RGB frames, image files)
-  kI420,  // `yuv`: Y' plane, then Cb and Cr at half size (libcamera's YUV420)
+  kI420,  // `yuv`: Y' plane, then Cb and Cr planes at half size (libcamera's YUV420)
+  kNv12,  // `yuv`: Y' plane, then one plane of interleaved Cb, Cr at half size
 };
 
-// A Y'CbCr 4:2:0 picture as three planes, each with its own row stride
-// (chroma planes are ceil(width/2) x ceil(height/2), chroma sited at the
-// centre of each 2x2 block). The planes are read in place: in a camera's
-// mapped dmabuf, or in the source's own storage.
+// A Y'CbCr 4:2:0 picture as planes, each with its own row stride (chroma
+// is ceil(width/2) x ceil(height/2) samples, sited at the centre of each 2x2
+// block): I420 has three (Y', Cb, Cr), NV12 two (Y', then Cb Cr pairs;
+// data[2] unused). The planes are read in place: in a camera's mapped
+// dmabuf, or in the source's own storage.
 struct YuvPlanes {
   const std::uint8_t* data[3] = {nullptr, nullptr, nullptr};
   int stride_bytes[3] = {0, 0, 0};
@@ -50,19 +52,28 @@ struct YuvPlanes {
   // so an importer can keep one EGLImage per buffer. 0: not a camera buffer.
   std::uint64_t buffer_id = 0;
 
-  bool hasDmabuf() const { return dmabuf_fd[0] >= 0 && dmabuf_fd[1] >= 0 && dmabuf_fd[2] >= 0; }
+  // Every plane of a `plane_count`-plane layout lives in a dmabuf.
+  bool hasDmabuf(int plane_count) const {
+    for (int p = 0; p < plane_count; ++p)
+      if (dmabuf_fd[p] < 0) return false;
+    return true;
+  }
 };
 
 // One pooled buffer.
+// 3 for kI420, 2 for kNv12, 1 for kRgb8.
+int planeCount(PixelLayout layout);
+bool isYuv(PixelLayout layout);
+
 struct FrameBuffer {
   PixelLayout layout = PixelLayout::kRgb8;
   int width_px = 0;
   int height_px = 0;
   ImageRGB8 rgb;                          // kRgb8
-  YuvPlanes yuv;                          // kI420
-  std::vector<std::uint8_t> yuv_storage;  // kI420 planes a source made itself
+  YuvPlanes yuv;                          // kI420, kNv12
+  std::vector<std::uint8_t> yuv_storage;  // YUV planes a source made itself
   // kRgb8: the luma the source computed on its own thread (off the render
-  // thread); kI420 needs none: the Y' plane is the luma.
+  // thread); YUV frames need none: the Y' plane is the luma.
   std::vector<std::uint8_t> luma_storage;
   FrameMetadata metadata;
 
@@ -70,9 +81,9 @@ struct FrameBuffer {
   LumaView luma() const;
   // Makes this an RGB frame of `rgb`'s size whose luma is computed from it.
   void finishRgb();
-  // Makes this an I420 frame of the given size in `yuv_storage` (tight rows)
-  // and returns the planes for the caller to fill.
-  YuvPlanes& allocateI420(int width_px, int height_px, const YcbcrEncoding& encoding);
+  // Makes this a kI420 or kNv12 frame of the given size in `yuv_storage`
+  // (tight rows) and returns the planes for the caller to fill.
+  YuvPlanes& allocateYuv420(PixelLayout layout, int width_px, int height_px, const YcbcrEncoding& encoding);
 };
 
 class FrameSource;

@@ -125,17 +125,20 @@ bool LibcameraSource::startCamera(std::string& error) {
     return false;
   }
   libcamera::StreamConfiguration& stream_config = config->at(0);
-  stream_config.pixelFormat = libcamera::formats::YUV420;
+  const bool nv12 = settings_.layout == PixelLayout::kNv12;
+  const libcamera::PixelFormat wanted_format = nv12 ? libcamera::formats::NV12 : libcamera::formats::YUV420;
+  const std::string format_name = nv12 ? "NV12" : "YUV420";
+  stream_config.pixelFormat = wanted_format;
   stream_config.size = libcamera::Size(static_cast<unsigned>(settings_.width_px), static_cast<unsigned>(settings_.height_px));
   stream_config.bufferCount = static_cast<unsigned>(settings_.buffer_count);
   // JPEG's full-range Rec601: all 256 codes carry signal (the ball's
   // highlights and shadows), and it is what the ISP gives stills. validate()
   // may change it; the GPU decodes whatever it settles on.
   stream_config.colorSpace = libcamera::ColorSpace::Sycc;
-  if (config->validate() == libcamera::CameraConfiguration::Invalid || stream_config.pixelFormat != libcamera::formats::YUV420 ||
+  if (config->validate() == libcamera::CameraConfiguration::Invalid || stream_config.pixelFormat != wanted_format ||
       stream_config.size.width != static_cast<unsigned>(settings_.width_px) ||
       stream_config.size.height != static_cast<unsigned>(settings_.height_px)) {
-    error = "camera: " + camera_->id() + " cannot stream YUV420 at " + std::to_string(settings_.width_px) + "x" +
+    error = "camera: " + camera_->id() + " cannot stream " + format_name + " at " + std::to_string(settings_.width_px) + "x" +
             std::to_string(settings_.height_px) + " (it offers " + stream_config.toString() +
             "): match camera.yaml's size to one it offers";
     return false;
@@ -147,9 +150,11 @@ bool LibcameraSource::startCamera(std::string& error) {
   stream_ = stream_config.stream();
   width_ = static_cast<int>(stream_config.size.width);
   height_ = static_cast<int>(stream_config.size.height);
-  // YUV420's chroma rows are half the luma stride.
+  // YUV420's chroma rows are half the luma stride; NV12's pairs fill a
+  // row as long as the luma's.
   strides_[0] = static_cast<int>(stream_config.stride);
-  strides_[1] = strides_[2] = strides_[0] / 2;
+  strides_[1] = strides_[2] = nv12 ? strides_[0] : strides_[0] / 2;
+  const std::size_t plane_count = nv12 ? 2 : 3;
   encoding_ = libcamera_adapter::encodingOf(stream_config.colorSpace);
   allocator_ = std::make_unique<libcamera::FrameBufferAllocator>(camera_);
   if (allocator_->allocate(stream_) < 0) {
@@ -167,11 +172,12 @@ bool LibcameraSource::startCamera(std::string& error) {
     // Map each dmabuf once; planes are offsets into it.
     int last_fd = -1;
     void* base = nullptr;
-    if (buffer->planes().size() != 3) {
-      error = "camera: a YUV420 buffer came with " + std::to_string(buffer->planes().size()) + " planes, not 3";
+    if (buffer->planes().size() != plane_count) {
+      error = "camera: a " + format_name + " buffer came with " + std::to_string(buffer->planes().size()) +
+              " planes, not " + std::to_string(plane_count);
       return false;
     }
-    for (std::size_t p = 0; p < 3; ++p) {
+    for (std::size_t p = 0; p < plane_count; ++p) {
       const auto& plane = buffer->planes()[p];
       const int fd = libcamera_adapter::planeFd(plane);
       if (fd != last_fd) {
@@ -189,10 +195,10 @@ bool LibcameraSource::startCamera(std::string& error) {
       slot->offsets[p] = plane.offset;
     }
     FrameBuffer& frame = slot->frame;
-    frame.layout = PixelLayout::kI420;
+    frame.layout = nv12 ? PixelLayout::kNv12 : PixelLayout::kI420;
     frame.width_px = width_;
     frame.height_px = height_;
-    for (int p = 0; p < 3; ++p) {
+    for (std::size_t p = 0; p < plane_count; ++p) {
       frame.yuv.data[p] = slot->planes[p];
       frame.yuv.stride_bytes[p] = strides_[p];
       frame.yuv.dmabuf_fd[p] = slot->fds[p];

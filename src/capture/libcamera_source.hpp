@@ -1,6 +1,6 @@
 // Frames from the board's camera through libcamera: the configured camera
-// (the first by default), one YUV420 stream at the configured size, requests
-// queued and re-queued.
+// (the first by default), one YUV420 (or NV12) stream at the configured
+// size, requests queued and re-queued.
 //
 // Zero-copy: each request's buffer is mapped once; a frame handed out is a
 // lease on the request itself: its I420 planes are read in place (tag
@@ -42,6 +42,9 @@ struct LibcameraSettings {
   int width_px = 640;
   int height_px = 480;
   int buffer_count = 4;
+  // kI420 (libcamera's YUV420, the default) or kNv12: both give tag
+  // detection a Y' plane to read in place.
+  PixelLayout layout = PixelLayout::kI420;
 };
 
 class LibcameraSource final : public FrameSource {

@@ -6,6 +6,22 @@
 
 namespace probelight {
 
+void encodeSimFrame(const ImageRGB8& rgb, PixelLayout layout, FrameBuffer& frame) {
+  if (!isYuv(layout)) {
+    frame.rgb = rgb;
+    frame.finishRgb();
+    return;
+  }
+  YuvPlanes& planes = frame.allocateYuv420(layout, rgb.width, rgb.height, YcbcrEncoding{YcbcrMatrix::kRec601, true});
+  auto* luma = const_cast<std::uint8_t*>(planes.data[0]);
+  auto* cb = const_cast<std::uint8_t*>(planes.data[1]);
+  if (layout == PixelLayout::kNv12)
+    sim::encodeYcbcr420Sycc(rgb, luma, planes.stride_bytes[0], cb, cb + 1, planes.stride_bytes[1], 2);
+  else
+    sim::encodeYcbcr420Sycc(rgb, luma, planes.stride_bytes[0], cb, const_cast<std::uint8_t*>(planes.data[2]),
+                            planes.stride_bytes[1], 1);
+}
+
 SimFrameSource::SimFrameSource(std::shared_ptr<const sim::World> world, std::uint64_t frame_count, int pool_size,
                                SimCameraOptions options)
     : ThreadedFrameSource(pool_size), world_(std::move(world)), frame_count_(frame_count), options_(options) {}
@@ -43,12 +59,9 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
   }
   try {
     FrameTruth truth;
-    if (options_.layout == PixelLayout::kI420) {
+    if (isYuv(options_.layout)) {
       world_->render(index, rendered_, truth);
-      YuvPlanes& planes = buffer.allocateI420(rendered_.width, rendered_.height, YcbcrEncoding{YcbcrMatrix::kRec601, true});
-      sim::encodeI420Sycc(rendered_, const_cast<std::uint8_t*>(planes.data[0]), planes.stride_bytes[0],
-                          const_cast<std::uint8_t*>(planes.data[1]), const_cast<std::uint8_t*>(planes.data[2]),
-                          planes.stride_bytes[1]);
+      encodeSimFrame(rendered_, options_.layout, buffer);
     } else {
       world_->render(index, buffer.rgb, truth);
       buffer.finishRgb();

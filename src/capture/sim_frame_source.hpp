@@ -10,8 +10,13 @@
 
 namespace probelight {
 
+// `rgb` as the simulated camera delivers it in `layout`: kRgb8 as is (with
+// its luma), kI420 or kNv12 encoded as the board's ISP does
+// (sim/camera_ycbcr.hpp: full-range Rec601).
+void encodeSimFrame(const ImageRGB8& rgb, PixelLayout layout, FrameBuffer& frame);
+
 struct SimCameraOptions {
-  // kRgb8, or kI420 as the board's camera gives (sim/camera_ycbcr.hpp).
+  // kRgb8, or kI420 / kNv12 as the board's camera gives.
   PixelLayout layout = PixelLayout::kRgb8;
   // A camera that disappears: frame `lost_at_frame` fails ("disconnected"),
   // then the next `failed_restarts` start() calls fail; the one after
@@ -45,7 +50,7 @@ class SimFrameSource : public ThreadedFrameSource {
   bool lost_ = false;       // the camera has gone (frame lost_at_frame failed)
   bool came_back_ = false;  // ... and a restart brought it back
   int restarts_failed_ = 0;
-  ImageRGB8 rendered_;      // kI420: the picture before encoding
+  ImageRGB8 rendered_;      // YUV layouts: the picture before encoding
 };
 
 }  // namespace probelight

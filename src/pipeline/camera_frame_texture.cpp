@@ -12,9 +12,15 @@
 namespace probelight::pipeline {
 namespace {
 
-// DRM_FORMAT_YUV420 ('YU12'): three planes Y, Cb, Cr, chroma halved both
-// ways. Spelled out so that the pipeline does not need libdrm's headers.
-constexpr EGLint kDrmFormatYuv420 = static_cast<EGLint>('Y' | ('U' << 8) | ('1' << 16) | (static_cast<unsigned>('2') << 24));
+// DRM fourccs, spelled out so that the pipeline does not need libdrm's
+// headers: YUV420 ('YU12': planes Y, Cb, Cr) and NV12 (Y, then Cb Cr pairs),
+// chroma halved both ways.
+constexpr EGLint fourcc(char a, char b, char c, char d) {
+  return static_cast<EGLint>(static_cast<unsigned>(a) | (static_cast<unsigned>(b) << 8) |
+                             (static_cast<unsigned>(c) << 16) | (static_cast<unsigned>(d) << 24));
+}
+constexpr EGLint kDrmFormatYuv420 = fourcc('Y', 'U', '1', '2');
+constexpr EGLint kDrmFormatNv12 = fourcc('N', 'V', '1', '2');
 
 // Restores the framebuffer and viewport a pass found: the conversion runs
 // in the middle of other stages' state.
@@ -56,8 +62,10 @@ bool CameraFrameTexture::init(const gles::Capabilities& capabilities, std::strin
   }
   unpack_row_length_ = capabilities.unpack_subimage;
   auto planes = gles::Program::fromEmbedded("camera_yuv.vert", "camera_yuv_planes.frag", "", error);
-  if (!planes || !quad_.init(error)) return false;
+  auto nv12 = gles::Program::fromEmbedded("camera_yuv.vert", "camera_yuv_planes.frag", "#define PL_NV12 1", error);
+  if (!planes || !nv12 || !quad_.init(error)) return false;
   planes_program_ = std::move(*planes);
+  nv12_program_ = std::move(*nv12);
   if (allow_dmabuf_import && capabilities.egl_dmabuf_import && capabilities.egl_image_external) {
     display_ = eglGetCurrentDisplay();
     create_image_ = reinterpret_cast<PFNEGLCREATEIMAGEKHRPROC>(eglGetProcAddress("eglCreateImageKHR"));
@@ -95,15 +103,20 @@ bool CameraFrameTexture::upload(const FrameBuffer& frame, std::string& error) {
   if (frame.layout == PixelLayout::kRgb8) return upload(frame.rgb, error);
   if (!checkSize(frame.width_px, frame.height_px, error)) return false;
   const YuvPlanes& planes = frame.yuv;
-  if (!planes.data[0] || !planes.data[1] || !planes.data[2] || planes.stride_bytes[0] < frame.width_px ||
-      planes.stride_bytes[1] < (frame.width_px + 1) / 2 || planes.stride_bytes[2] < (frame.width_px + 1) / 2) {
-    error = "CameraFrameTexture: the I420 frame's planes are missing or their strides are shorter than a row";
+  const bool nv12 = frame.layout == PixelLayout::kNv12;
+  const int chroma_row_bytes = (nv12 ? 2 : 1) * ((frame.width_px + 1) / 2);
+  bool planes_ok = planes.data[0] && planes.stride_bytes[0] >= frame.width_px;
+  for (int p = 1; p < planeCount(frame.layout); ++p)
+    planes_ok = planes_ok && planes.data[p] && planes.stride_bytes[p] >= chroma_row_bytes;
+  if (!planes_ok) {
+    error = std::string("CameraFrameTexture: the ") + (nv12 ? "NV12" : "I420") +
+            " frame's planes are missing or their strides are shorter than a row";
     return false;
   }
   if (!ensureRenderableTexture(frame.width_px, frame.height_px, error)) return false;
-  if (dmabuf_import_available_ && planes.hasDmabuf()) {
+  if (dmabuf_import_available_ && planes.hasDmabuf(planeCount(frame.layout))) {
     std::string import_error;
-    if (importDmabuf(planes, frame.width_px, frame.height_px, import_error)) {
+    if (importDmabuf(planes, frame.layout, frame.width_px, frame.height_px, import_error)) {
       last_path_ = FrameUploadPath::kDmabufImport;
       return true;
     }
@@ -112,7 +125,7 @@ bool CameraFrameTexture::upload(const FrameBuffer& frame, std::string& error) {
     dmabuf_import_problem_ = import_error;
     forgetImportedBuffers();
   }
-  if (!uploadPlanes(planes, frame.width_px, frame.height_px, error)) return false;
+  if (!uploadPlanes(planes, frame.layout, frame.width_px, frame.height_px, error)) return false;
   last_path_ = FrameUploadPath::kYuvUpload;
   return true;
 }
@@ -166,59 +179,68 @@ bool CameraFrameTexture::ensureRenderableTexture(int width_px, int height_px, st
 }
 
 bool CameraFrameTexture::uploadPlane(gles::Texture& texture, int& allocated_width, int& allocated_height,
-                                     const std::uint8_t* data, int stride_bytes, int width_px, int height_px,
-                                     std::string& error) {
+                                     GLenum& allocated_format, const std::uint8_t* data, int stride_bytes, int width_px,
+                                     int height_px, GLenum format, std::string& error) {
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  const bool tight = stride_bytes == width_px;
-  const bool reallocate = !texture.valid() || allocated_width != width_px || allocated_height != height_px;
+  const int bytes_per_texel = format == GL_LUMINANCE_ALPHA ? 2 : 1;
+  const bool tight = stride_bytes == width_px * bytes_per_texel;
+  const bool reallocate = !texture.valid() || allocated_width != width_px || allocated_height != height_px ||
+                          allocated_format != format;
   if (reallocate) {
-    auto created = gles::createTexture2D(width_px, height_px, GL_LUMINANCE, GL_UNSIGNED_BYTE, GL_LINEAR,
+    auto created = gles::createTexture2D(width_px, height_px, format, GL_UNSIGNED_BYTE, GL_LINEAR,
                                          tight ? data : nullptr, error);
     if (!created) return false;
     texture = std::move(*created);
     allocated_width = width_px;
     allocated_height = height_px;
+    allocated_format = format;
     if (tight) return true;
   }
   glBindTexture(GL_TEXTURE_2D, texture.id());
   if (tight) {
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_px, height_px, GL_LUMINANCE, GL_UNSIGNED_BYTE, data);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_px, height_px, format, GL_UNSIGNED_BYTE, data);
   } else if (unpack_row_length_) {
-    glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, stride_bytes);
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_px, height_px, GL_LUMINANCE, GL_UNSIGNED_BYTE, data);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, stride_bytes / bytes_per_texel);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_px, height_px, format, GL_UNSIGNED_BYTE, data);
     glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, 0);
   } else {
     // Plain GLES2 cannot skip padding: one row at a time (cameras pad rows
     // to 32 or 64 bytes; the copy stays in the driver).
     for (int row = 0; row < height_px; ++row)
-      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, row, width_px, 1, GL_LUMINANCE, GL_UNSIGNED_BYTE,
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, row, width_px, 1, format, GL_UNSIGNED_BYTE,
                       data + static_cast<std::size_t>(row) * static_cast<std::size_t>(stride_bytes));
   }
   return gles::checkGl("glTexSubImage2D(camera plane)", error);
 }
 
-bool CameraFrameTexture::uploadPlanes(const YuvPlanes& planes, int width_px, int height_px, std::string& error) {
+bool CameraFrameTexture::uploadPlanes(const YuvPlanes& planes, PixelLayout layout, int width_px, int height_px,
+                                      std::string& error) {
   const int chroma_width = (width_px + 1) / 2, chroma_height = (height_px + 1) / 2;
+  const bool nv12 = layout == PixelLayout::kNv12;
   const int widths[3] = {width_px, chroma_width, chroma_width};
   const int heights[3] = {height_px, chroma_height, chroma_height};
-  for (int p = 0; p < 3; ++p)
-    if (!uploadPlane(planes_[p], plane_width_[p], plane_height_[p], planes.data[p], planes.stride_bytes[p], widths[p],
-                     heights[p], error))
+  // NV12's Cb Cr pairs as LUMINANCE_ALPHA: Cb in .r, Cr in .a.
+  const GLenum formats[3] = {GL_LUMINANCE, nv12 ? GLenum(GL_LUMINANCE_ALPHA) : GLenum(GL_LUMINANCE), GL_LUMINANCE};
+  const int plane_count = planeCount(layout);
+  for (int p = 0; p < plane_count; ++p)
+    if (!uploadPlane(planes_[p], plane_width_[p], plane_height_[p], plane_format_[p], planes.data[p],
+                     planes.stride_bytes[p], widths[p], heights[p], formats[p], error))
       return false;
   const YcbcrDecoding decoding = ycbcrDecoding(planes.encoding);
-  planes_program_.use();
-  for (int p = 0; p < 3; ++p) {
+  const gles::Program& program = nv12 ? nv12_program_ : planes_program_;
+  program.use();
+  for (int p = 0; p < plane_count; ++p) {
     glActiveTexture(GL_TEXTURE0 + p);
     glBindTexture(GL_TEXTURE_2D, planes_[p].id());
   }
-  glUniform1i(planes_program_.uniform("u_luma"), 0);
-  glUniform1i(planes_program_.uniform("u_cb"), 1);
-  glUniform1i(planes_program_.uniform("u_cr"), 2);
-  glUniform2f(planes_program_.uniform("u_chroma_scale"), static_cast<float>(width_px) / (2.0f * chroma_width),
+  glUniform1i(program.uniform("u_luma"), 0);
+  glUniform1i(program.uniform("u_cb"), 1);
+  glUniform1i(program.uniform("u_cr"), nv12 ? 1 : 2);
+  glUniform2f(program.uniform("u_chroma_scale"), static_cast<float>(width_px) / (2.0f * chroma_width),
               static_cast<float>(height_px) / (2.0f * chroma_height));
-  glUniformMatrix3fv(planes_program_.uniform("u_ycbcr_to_rgb"), 1, GL_FALSE, decoding.matrix);
-  glUniform3fv(planes_program_.uniform("u_offset"), 1, decoding.offset);
-  const bool drawn = drawIntoTexture(planes_program_, error);
+  glUniformMatrix3fv(program.uniform("u_ycbcr_to_rgb"), 1, GL_FALSE, decoding.matrix);
+  glUniform3fv(program.uniform("u_offset"), 1, decoding.offset);
+  const bool drawn = drawIntoTexture(program, error);
   glActiveTexture(GL_TEXTURE0);
   return drawn;
 }
@@ -258,7 +280,8 @@ bool CameraFrameTexture::convertExternalImage(EGLImageKHR image, int width_px, i
   return drawn;
 }
 
-bool CameraFrameTexture::importDmabuf(const YuvPlanes& planes, int width_px, int height_px, std::string& error) {
+bool CameraFrameTexture::importDmabuf(const YuvPlanes& planes, PixelLayout layout, int width_px, int height_px,
+                                      std::string& error) {
   if (width_px != imported_width_px_ || height_px != imported_height_px_) forgetImportedBuffers();
   imported_width_px_ = width_px;
   imported_height_px_ = height_px;
@@ -270,21 +293,26 @@ bool CameraFrameTexture::importDmabuf(const YuvPlanes& planes, int width_px, int
     const EGLint color_space = encoding.matrix == YcbcrMatrix::kRec601   ? EGL_ITU_REC601_EXT
                                : encoding.matrix == YcbcrMatrix::kRec709 ? EGL_ITU_REC709_EXT
                                                                          : EGL_ITU_REC2020_EXT;
-    const EGLint attributes[] = {
-        EGL_WIDTH, width_px, EGL_HEIGHT, height_px, EGL_LINUX_DRM_FOURCC_EXT, kDrmFormatYuv420,
-        EGL_DMA_BUF_PLANE0_FD_EXT, planes.dmabuf_fd[0], EGL_DMA_BUF_PLANE0_OFFSET_EXT,
-        static_cast<EGLint>(planes.dmabuf_offset[0]), EGL_DMA_BUF_PLANE0_PITCH_EXT, planes.stride_bytes[0],
-        EGL_DMA_BUF_PLANE1_FD_EXT, planes.dmabuf_fd[1], EGL_DMA_BUF_PLANE1_OFFSET_EXT,
-        static_cast<EGLint>(planes.dmabuf_offset[1]), EGL_DMA_BUF_PLANE1_PITCH_EXT, planes.stride_bytes[1],
-        EGL_DMA_BUF_PLANE2_FD_EXT, planes.dmabuf_fd[2], EGL_DMA_BUF_PLANE2_OFFSET_EXT,
-        static_cast<EGLint>(planes.dmabuf_offset[2]), EGL_DMA_BUF_PLANE2_PITCH_EXT, planes.stride_bytes[2],
-        EGL_YUV_COLOR_SPACE_HINT_EXT, color_space, EGL_SAMPLE_RANGE_HINT_EXT,
-        encoding.full_range ? EGL_YUV_FULL_RANGE_EXT : EGL_YUV_NARROW_RANGE_EXT,
-        EGL_YUV_CHROMA_HORIZONTAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT,
-        EGL_YUV_CHROMA_VERTICAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT, EGL_NONE};
-    image = create_image_(display_, EGL_NO_CONTEXT, EGL_LINUX_DMA_BUF_EXT, nullptr, attributes);
+    const bool nv12 = layout == PixelLayout::kNv12;
+    std::vector<EGLint> attributes = {EGL_WIDTH, width_px, EGL_HEIGHT, height_px, EGL_LINUX_DRM_FOURCC_EXT,
+                                      nv12 ? kDrmFormatNv12 : kDrmFormatYuv420};
+    const EGLint plane_keys[3][3] = {
+        {EGL_DMA_BUF_PLANE0_FD_EXT, EGL_DMA_BUF_PLANE0_OFFSET_EXT, EGL_DMA_BUF_PLANE0_PITCH_EXT},
+        {EGL_DMA_BUF_PLANE1_FD_EXT, EGL_DMA_BUF_PLANE1_OFFSET_EXT, EGL_DMA_BUF_PLANE1_PITCH_EXT},
+        {EGL_DMA_BUF_PLANE2_FD_EXT, EGL_DMA_BUF_PLANE2_OFFSET_EXT, EGL_DMA_BUF_PLANE2_PITCH_EXT}};
+    for (int p = 0; p < planeCount(layout); ++p)
+      attributes.insert(attributes.end(), {plane_keys[p][0], planes.dmabuf_fd[p], plane_keys[p][1],
+                                           static_cast<EGLint>(planes.dmabuf_offset[p]), plane_keys[p][2],
+                                           planes.stride_bytes[p]});
+    attributes.insert(attributes.end(),
+                      {EGL_YUV_COLOR_SPACE_HINT_EXT, color_space, EGL_SAMPLE_RANGE_HINT_EXT,
+                       encoding.full_range ? EGL_YUV_FULL_RANGE_EXT : EGL_YUV_NARROW_RANGE_EXT,
+                       EGL_YUV_CHROMA_HORIZONTAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT,
+                       EGL_YUV_CHROMA_VERTICAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT, EGL_NONE});
+    image = create_image_(display_, EGL_NO_CONTEXT, EGL_LINUX_DMA_BUF_EXT, nullptr, attributes.data());
     if (image == EGL_NO_IMAGE_KHR) {
-      error = "eglCreateImageKHR refused the camera's YUV420 dmabuf (EGL error 0x" +
+      error = std::string("eglCreateImageKHR refused the camera's ") + (nv12 ? "NV12" : "YUV420") +
+              " dmabuf (EGL error 0x" +
               [] {
                 char text[16];
                 std::snprintf(text, sizeof text, "%04x", static_cast<unsigned>(eglGetError()));

@@ -1,18 +1,19 @@
 // Stage 1: the camera frame as a GL texture.
 // Input: a FrameBuffer: sRGB bytes (simulated RGB, image files), or the
-// board camera's I420 planes. Output: one 2D texture of sRGB bytes, LINEAR,
+// board camera's I420 or NV12 planes. Output: one 2D texture of sRGB bytes, LINEAR,
 // CLAMP_TO_EDGE, image row 0 at t = 0, that every later stage samples. An
 // OpenCV pixel position p (pixel centres at integers) is sampled at
 // texcoord = (p + 0.5) / size.
 //
-// I420 frames take one of two paths to it:
+// YUV frames take one of two paths to it:
 //  - dmabuf import (zero-copy): when the planes live in a camera dmabuf and
 //    EGL has EGL_EXT_image_dma_buf_import and GL has
 //    GL_OES_EGL_image_external, the buffer is imported once as an EGLImage
 //    (cached per camera buffer) with the stream's colour-space hints, and a
 //    pass samples it as samplerExternalOES into the RGB texture;
-//  - upload: the three planes as LUMINANCE textures, converted by a pass
-//    with the stream's matrix and range (core/ycbcr.hpp).
+//  - upload: the planes as LUMINANCE (NV12's Cb Cr pairs as
+//    LUMINANCE_ALPHA) textures, converted by a pass with the stream's matrix
+//    and range (core/ycbcr.hpp).
 // A failed import falls back to the upload path for good, said once.
 #pragma once
 
@@ -21,6 +22,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 #include <vector>
 
 #include "capture/frame_source.hpp"
@@ -70,12 +72,13 @@ class CameraFrameTexture {
   };
   bool checkSize(int width_px, int height_px, std::string& error) const;
   bool ensureRenderableTexture(int width_px, int height_px, std::string& error);
-  bool uploadPlanes(const YuvPlanes& planes, int width_px, int height_px, std::string& error);
-  bool uploadPlane(gles::Texture& texture, int& allocated_width, int& allocated_height, const std::uint8_t* data,
-                   int stride_bytes, int width_px, int height_px, std::string& error);
+  bool uploadPlanes(const YuvPlanes& planes, PixelLayout layout, int width_px, int height_px, std::string& error);
+  bool uploadPlane(gles::Texture& texture, int& allocated_width, int& allocated_height, GLenum& allocated_format,
+                   const std::uint8_t* data, int stride_bytes, int width_px, int height_px, GLenum format,
+                   std::string& error);
   // True when imported; false with `error` empty when the frame cannot be
   // imported (no dmabuf), false with `error` set when an import failed.
-  bool importDmabuf(const YuvPlanes& planes, int width_px, int height_px, std::string& error);
+  bool importDmabuf(const YuvPlanes& planes, PixelLayout layout, int width_px, int height_px, std::string& error);
   void forgetImportedBuffers();
   // Draws `program` over the whole output texture.
   bool drawIntoTexture(const gles::Program& program, std::string& error);
@@ -88,12 +91,14 @@ class CameraFrameTexture {
   gles::Framebuffer framebuffer_;
   FrameUploadPath last_path_ = FrameUploadPath::kNone;
 
-  gles::Program planes_program_;
+  gles::Program planes_program_;  // I420: three LUMINANCE planes
+  gles::Program nv12_program_;    // NV12: LUMINANCE + LUMINANCE_ALPHA
   gles::Program external_program_;
   gles::FullScreenQuad quad_;
   gles::Texture planes_[3];
   int plane_width_[3] = {0, 0, 0};
   int plane_height_[3] = {0, 0, 0};
+  GLenum plane_format_[3] = {0, 0, 0};
   bool unpack_row_length_ = false;  // GL_EXT_unpack_subimage: strided rows in one call
 
   bool dmabuf_import_available_ = false;

@@ -10,8 +10,8 @@ std::uint8_t toCode(double value) { return static_cast<std::uint8_t>(std::clamp(
 
 }  // namespace
 
-void encodeI420Sycc(const ImageRGB8& rgb, std::uint8_t* y_plane, int y_stride, std::uint8_t* cb_plane,
-                    std::uint8_t* cr_plane, int chroma_stride) {
+void encodeYcbcr420Sycc(const ImageRGB8& rgb, std::uint8_t* y_plane, int y_stride, std::uint8_t* cb_plane,
+                        std::uint8_t* cr_plane, int chroma_stride, int chroma_step) {
   // ITU-T T.871 (JFIF): Y = 0.299 R + 0.587 G + 0.114 B,
   // Cb = 128 + (B - Y) / 1.772, Cr = 128 + (R - Y) / 1.402, on 0-255 codes.
   const int width = rgb.width, height = rgb.height;
@@ -35,8 +35,8 @@ void encodeI420Sycc(const ImageRGB8& rgb, std::uint8_t* y_plane, int y_stride, s
           cr_sum += (pixel[0] - luma) / 1.402;
           ++count;
         }
-      cb_plane[cy * chroma_stride + cx] = toCode(128.0 + cb_sum / count);
-      cr_plane[cy * chroma_stride + cx] = toCode(128.0 + cr_sum / count);
+      cb_plane[cy * chroma_stride + cx * chroma_step] = toCode(128.0 + cb_sum / count);
+      cr_plane[cy * chroma_stride + cx * chroma_step] = toCode(128.0 + cr_sum / count);
     }
 }
 

@@ -11,8 +11,11 @@
 
 namespace probelight::sim {
 
-// Planes of ceil(w/2) x ceil(h/2) chroma; strides in bytes.
-void encodeI420Sycc(const ImageRGB8& rgb, std::uint8_t* y_plane, int y_stride, std::uint8_t* cb_plane,
-                    std::uint8_t* cr_plane, int chroma_stride);
+// Chroma planes of ceil(w/2) x ceil(h/2) samples; strides in bytes.
+// `chroma_step` is the byte step between samples of one chroma row: 1 for
+// planar I420 (YUV420), 2 for NV12, whose Cb and Cr interleave in one plane
+// (cr_plane = cb_plane + 1).
+void encodeYcbcr420Sycc(const ImageRGB8& rgb, std::uint8_t* y_plane, int y_stride, std::uint8_t* cb_plane,
+                        std::uint8_t* cr_plane, int chroma_stride, int chroma_step);
 
 }  // namespace probelight::sim

@@ -63,7 +63,7 @@ class CameraRun : public testing::BinaryTest {
 // from RGB frames: the limits are issue 4's pose and ball targets, and the
 // diffuse map within 1% of the RGB run's error (4:2:0 halves the chroma
 // resolution of a ~30 px ball; irradiance integrates it away).
-TEST_F(CameraRun, I420FramesTrackAndLightAsWellAsRgbFrames) {
+TEST_F(CameraRun, YuvFramesTrackAndLightAsWellAsRgbFrames) {
   const testing::CommandResult rgb = runSim("rgb", "", 30);
   const testing::CommandResult yuv = runSim("yuv", "sim:\n  pixel_format: yuv420\n", 30);
   ASSERT_EQ(rgb.exit_status, 0) << rgb.stderr_text;
@@ -87,6 +87,16 @@ TEST_F(CameraRun, I420FramesTrackAndLightAsWellAsRgbFrames) {
   EXPECT_EQ(yuv_report["camera"]["analogue_gain"]["median"], 1.0);
   EXPECT_EQ(yuv_report["camera"]["exposure_locks"], 0);
   EXPECT_EQ(yuv_report["camera"]["exposure_at_last_fit"]["locked"], false);
+  // NV12 (one plane of Cb Cr pairs) tracks and lights the same way.
+  const testing::CommandResult nv12 = runSim("nv12", "sim:\n  pixel_format: nv12\n", 30);
+  ASSERT_EQ(nv12.exit_status, 0) << nv12.stderr_text;
+  const nlohmann::json nv12_report = readReport(dir_ / "nv12");
+  EXPECT_EQ(nv12_report["camera"]["frame_upload"], "yuv upload");
+  EXPECT_LE(nv12_report["accuracy"]["pose_rotation_error_deg"].get<double>(), 0.3);
+  EXPECT_LE(nv12_report["accuracy"]["probe_center_error_px"].get<double>(), 0.5);
+  EXPECT_NEAR(nv12_report["accuracy"]["diffuse_irradiance_rel_error_vs_clipped"].get<double>(),
+              accuracy["diffuse_irradiance_rel_error_vs_clipped"].get<double>(), 1e-6)
+      << "the same pixels in another layout";
 }
 
 // The camera disappears at frame 12 and the first two reconnects fail: the

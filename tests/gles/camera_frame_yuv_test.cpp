@@ -17,7 +17,7 @@
 #include "core/ycbcr.hpp"
 #include "gles_test_support.hpp"
 #include "pipeline/camera_frame_texture.hpp"
-#include "sim/camera_ycbcr.hpp"
+#include "capture/sim_frame_source.hpp"
 
 namespace probelight {
 namespace {
@@ -41,12 +41,9 @@ ImageRGB8 flatPatchImage(int width, int height, int patch_px, unsigned seed) {
   return image;
 }
 
-FrameBuffer i420Frame(const ImageRGB8& image) {
+FrameBuffer yuvFrame(const ImageRGB8& image, PixelLayout layout = PixelLayout::kI420) {
   FrameBuffer frame;
-  YuvPlanes& planes = frame.allocateI420(image.width, image.height, YcbcrEncoding{YcbcrMatrix::kRec601, true});
-  sim::encodeI420Sycc(image, const_cast<std::uint8_t*>(planes.data[0]), planes.stride_bytes[0],
-                      const_cast<std::uint8_t*>(planes.data[1]), const_cast<std::uint8_t*>(planes.data[2]),
-                      planes.stride_bytes[1]);
+  encodeSimFrame(image, layout, frame);
   return frame;
 }
 
@@ -95,51 +92,59 @@ int maxDifferenceInsidePatches(const ImageRGB8& a, const ImageRGB8& b, int patch
 // codes (blue), and the 8-bit output rounds by another 0.5: 2 codes.
 constexpr int kRoundingTolerance = 2;
 
-TEST_F(GpuTest, I420PlanesConvertToTheRgbTheyCameFrom) {
+TEST_F(GpuTest, I420AndNv12PlanesConvertToTheRgbTheyCameFrom) {
   const ImageRGB8 image = flatPatchImage(640, 480, 8, 7);
-  const FrameBuffer frame = i420Frame(image);
   pipeline::CameraFrameTexture texture;
   std::string error;
   ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
-  ASSERT_TRUE(texture.upload(frame, error)) << error;
-  EXPECT_EQ(texture.lastPath(), pipeline::FrameUploadPath::kYuvUpload);
-  EXPECT_LE(maxDifferenceInsidePatches(readTexture(texture.texture(), 640, 480), image, 8), kRoundingTolerance);
+  // One texture object through both layouts (and back): the chroma plane's
+  // format changes with them.
+  for (const PixelLayout layout : {PixelLayout::kI420, PixelLayout::kNv12, PixelLayout::kI420}) {
+    SCOPED_TRACE(layout == PixelLayout::kNv12 ? "NV12" : "I420");
+    ASSERT_TRUE(texture.upload(yuvFrame(image, layout), error)) << error;
+    EXPECT_EQ(texture.lastPath(), pipeline::FrameUploadPath::kYuvUpload);
+    EXPECT_LE(maxDifferenceInsidePatches(readTexture(texture.texture(), 640, 480), image, 8), kRoundingTolerance);
+  }
 }
 
-TEST_F(GpuTest, I420ConversionHoldsOnThePlain8BitPathAndForOddSizes) {
+TEST_F(GpuTest, YuvConversionHoldsOnThePlain8BitPathForOddSizesAndPaddedRows) {
   // Without extensions (no GL_EXT_unpack_subimage: strided rows one by one),
   // with padded rows, and a size whose chroma planes are rounded up.
   const ImageRGB8 image = flatPatchImage(101, 37, 4, 11);
-  FrameBuffer tight = i420Frame(image);
-  // The same planes with 64 bytes of padding per row, as cameras allocate.
-  std::vector<std::uint8_t> padded;
-  FrameBuffer strided = tight;
-  int offsets[3] = {0, 0, 0};
-  const int widths[3] = {101, 51, 51}, heights[3] = {37, 19, 19};
-  for (int p = 0; p < 3; ++p) {
-    offsets[p] = static_cast<int>(padded.size());
-    padded.resize(padded.size() + static_cast<std::size_t>((widths[p] + 64) * heights[p]), 0xAB);
-  }
-  for (int p = 0; p < 3; ++p)
-    for (int row = 0; row < heights[p]; ++row)
-      std::copy_n(tight.yuv.data[p] + row * tight.yuv.stride_bytes[p], widths[p],
-                  padded.begin() + offsets[p] + row * (widths[p] + 64));
-  for (int p = 0; p < 3; ++p) {
-    strided.yuv.data[p] = padded.data() + offsets[p];
-    strided.yuv.stride_bytes[p] = widths[p] + 64;
-  }
-  std::string error;
-  for (const bool plain : {false, true}) {
-    SCOPED_TRACE(plain ? "extensions masked" : "all extensions");
-    const gles::Capabilities caps =
-        plain ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
-    pipeline::CameraFrameTexture texture;
-    ASSERT_TRUE(texture.init(caps, error)) << error;
-    ASSERT_TRUE(texture.upload(tight, error)) << error;
-    const ImageRGB8 from_tight = readTexture(texture.texture(), 101, 37);
-    EXPECT_LE(maxDifferenceInsidePatches(from_tight, image, 4), kRoundingTolerance);
-    ASSERT_TRUE(texture.upload(strided, error)) << error;
-    EXPECT_EQ(maxDifference(readTexture(texture.texture(), 101, 37), from_tight), 0) << "padding leaked in";
+  for (const PixelLayout layout : {PixelLayout::kI420, PixelLayout::kNv12}) {
+    const bool nv12 = layout == PixelLayout::kNv12;
+    SCOPED_TRACE(nv12 ? "NV12" : "I420");
+    const FrameBuffer tight = yuvFrame(image, layout);
+    // The same planes with 64 bytes of padding per row, as cameras allocate.
+    const int plane_count = planeCount(layout);
+    const int row_bytes[3] = {101, nv12 ? 102 : 51, 51}, heights[3] = {37, 19, 19};
+    std::vector<std::uint8_t> padded;
+    int offsets[3] = {0, 0, 0};
+    for (int p = 0; p < plane_count; ++p) {
+      offsets[p] = static_cast<int>(padded.size());
+      padded.resize(padded.size() + static_cast<std::size_t>((row_bytes[p] + 64) * heights[p]), 0xAB);
+    }
+    FrameBuffer strided = tight;
+    for (int p = 0; p < plane_count; ++p) {
+      for (int row = 0; row < heights[p]; ++row)
+        std::copy_n(tight.yuv.data[p] + row * tight.yuv.stride_bytes[p], row_bytes[p],
+                    padded.begin() + offsets[p] + row * (row_bytes[p] + 64));
+      strided.yuv.data[p] = padded.data() + offsets[p];
+      strided.yuv.stride_bytes[p] = row_bytes[p] + 64;
+    }
+    std::string error;
+    for (const bool plain : {false, true}) {
+      SCOPED_TRACE(plain ? "extensions masked" : "all extensions");
+      const gles::Capabilities caps =
+          plain ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
+      pipeline::CameraFrameTexture texture;
+      ASSERT_TRUE(texture.init(caps, error)) << error;
+      ASSERT_TRUE(texture.upload(tight, error)) << error;
+      const ImageRGB8 from_tight = readTexture(texture.texture(), 101, 37);
+      EXPECT_LE(maxDifferenceInsidePatches(from_tight, image, 4), kRoundingTolerance);
+      ASSERT_TRUE(texture.upload(strided, error)) << error;
+      EXPECT_EQ(maxDifference(readTexture(texture.texture(), 101, 37), from_tight), 0) << "padding leaked in";
+    }
   }
 }
 
@@ -218,11 +223,11 @@ TEST_F(GpuTest, BrokenI420FramesAreRefusedWithAReason) {
   pipeline::CameraFrameTexture texture;
   std::string error;
   ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
-  FrameBuffer frame = i420Frame(flatPatchImage(64, 48, 2, 1));
+  FrameBuffer frame = yuvFrame(flatPatchImage(64, 48, 2, 1));
   frame.yuv.data[2] = nullptr;
   EXPECT_FALSE(texture.upload(frame, error));
   EXPECT_NE(error.find("planes"), std::string::npos) << error;
-  frame = i420Frame(flatPatchImage(64, 48, 2, 1));
+  frame = yuvFrame(flatPatchImage(64, 48, 2, 1));
   frame.yuv.stride_bytes[0] = 10;  // shorter than a row
   EXPECT_FALSE(texture.upload(frame, error));
   EXPECT_NE(error.find("stride"), std::string::npos) << error;
