@@ -32,9 +32,9 @@ int planeFd(const Plane& plane) {
 }
 
 // Freezes (locked) or releases auto exposure, gain and white balance. 0.5
-// replaced AeEnable by ExposureTimeMode and AnalogueGainMode; switching them
-// to manual without a value keeps the last values AE chose, as AeEnable
-// false did before.
+// split AeEnable into ExposureTimeMode and AnalogueGainMode (AeEnable stays,
+// input-only, as a shorthand for both); switching them to manual without a
+// value keeps the last values AE chose, as AeEnable false did before.
 inline void setExposureLocked(libcamera::ControlList& controls, bool locked) {
 #if LIBCAMERA_VERSION_MAJOR > 0 || LIBCAMERA_VERSION_MINOR >= 5
   controls.set(libcamera::controls::ExposureTimeMode,
