@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -22,6 +23,7 @@
 #include "app/run_report.hpp"
 #include "app/reconnect_backoff.hpp"
 #include "app/service_notify.hpp"
+#include "app/shutdown_request.hpp"
 #include "app/stage_settings.hpp"
 #include "app/state_store.hpp"
 #include "capture/image_frame_source.hpp"
@@ -225,6 +227,7 @@ class Kiosk {
   // The exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration.
   int run() {
     if (const int status = setUp(); status != 0) return status;
+    installShutdownHandlers();
     const auto loop_start = std::chrono::steady_clock::now();
     const int status = frameLoop();
     notifier_.stopping();
@@ -357,6 +360,11 @@ class Kiosk {
   int frameLoop() {
     int consecutive_timeouts = 0;
     while (frameLimit() == 0 || frames_done_ < frameLimit()) {
+      if (const int signal_number = shutdownSignal(); signal_number != 0) {
+        log_ << logPrefix(LogPriority::kInfo) << "probelight: " << (signal_number == SIGTERM ? "SIGTERM" : "SIGINT")
+             << ": stopping after " << frames_done_ << " frames\n";
+        return 0;
+      }
       pollButton();
       status_led_->set(ledLitAt(ledPatternFor(machine_.state() == AppState::kRecalibrating, reconnect_.lost()),
                                 monotonicNowS()));

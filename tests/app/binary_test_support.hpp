@@ -54,9 +54,13 @@ class BinaryTest : public ::testing::Test {
   }
 
   // `probelight ARGS`, stdout discarded.
-  CommandResult run(const std::string& args) const {
+  CommandResult run(const std::string& args) const { return runWrapped("", args); }
+
+  // `WRAPPER probelight ARGS` (e.g. "timeout -s TERM 5"), stdout discarded.
+  CommandResult runWrapped(const std::string& wrapper, const std::string& args) const {
     const std::filesystem::path err = dir_ / "stderr.txt";
-    const std::string command = std::string(PROBELIGHT_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
+    const std::string command =
+        wrapper + " " + std::string(PROBELIGHT_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
     const int status = std::system(command.c_str());
     CommandResult result;
     result.exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -178,5 +178,19 @@ TEST_F(ServiceUnit, StderrLinesCarryJournalPrioritiesUnderSystemd) {
   EXPECT_EQ(plain.stderr_text.rfind("probelight: ", 0), 0u) << plain.stderr_text;
 }
 
+// `systemctl stop` sends SIGTERM: an endless run ends between frames with
+// exit status 0 and its report written, rather than dying mid-frame.
+TEST_F(ServiceUnit, SigtermEndsAnEndlessRunCleanlyWithItsReport) {
+  const fs::path out = dir_ / "out";
+  // timeout sends SIGTERM after 6 s and, with --preserve-status, exits with
+  // the kiosk's own status.
+  const testing::CommandResult result = runWrapped("timeout --preserve-status -s TERM 6",
+                                                   "run --frames 0 --save-every 0 --out " + out.string());
+  EXPECT_EQ(result.exit_status, 0) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find("SIGTERM: stopping after"), std::string::npos) << result.stderr_text;
+  ASSERT_TRUE(fs::exists(out / "report.json")) << result.stderr_text;
+  EXPECT_GT(readReport(out)["frames"].get<long long>(), 0);
+}
+
 }  // namespace
 }  // namespace probelight
