@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -29,6 +30,9 @@
 #include "ibl/color_transfer.hpp"
 #include "gles/render_target.hpp"
 #include "ibl/ground_shadow.hpp"
+#include "ibl/hdr_bracket.hpp"
+#include "ibl/irradiance.hpp"
+#include "ibl/probe_to_cube.hpp"
 #include "ibl/light_dome.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
@@ -168,6 +172,12 @@ struct Analysis {
 
 // One analysis: each method is one step, and each leaves in `result_` what
 // it found, so that a failure part-way still reports everything before it.
+// A bracket frame whose ball sits further than this from --frame's (the
+// camera or the rig moved between exposures) would smear every edge of the
+// merged map; tag poses agree to a few hundredths of a pixel when nothing
+// moved.
+constexpr double kBracketMaxBallShiftPx = 1.0;
+
 class Analyzer {
  public:
   Analyzer(const AnalyzeOptions& options, std::ostream& log, const RenderOptions* render = nullptr)
@@ -179,6 +189,7 @@ class Analyzer {
     detectTag();
     if (track_.found) measureProbe();
     if (probe_usable_) makeMaps();
+    if (reflection_ && !options_.brackets.empty()) mergeBracket();
     if (reflection_) fitLights();
     if (render_ && reflection_ && result_.status == 0) renderComposite();
     writePictures();
@@ -396,12 +407,163 @@ class Analyzer {
     result_.json["irradiance"] = entries;
   }
 
+  // --bracket: the frame and its bracket merged into one radiance image
+  // (ibl/hdr_bracket.hpp), projected into an HDR reflection map on the CPU.
+  // Each bracket frame is checked first and left out, with its reason, when
+  // it cannot be read, differs in size, is all clipped or all black, shows
+  // the tag elsewhere (the camera moved), or its pixels disagree with its EV
+  // by more than half a stop. With nothing left the 8-bit map stands.
+  void mergeBracket() {
+    const auto start = Clock::now();
+    const ibl::HdrMergeSettings merge{settings_.maps.stages.camera_transfer};
+    struct Candidate {
+      std::string path;
+      double ev;
+      ImageRGB8 rgb;
+    };
+    std::vector<Candidate> accepted;
+    Json frames = Json::array();
+    auto refuse = [&](const BracketOption& bracket, const std::string& why) {
+      frames.push_back({{"path", bracket.path}, {"ev", bracket.ev}, {"used", false}, {"reason", why}});
+      log_ << logPrefix(LogPriority::kWarning) << "probelight: " << (render_ ? "render" : "analyze") << ": warning: "
+           << "--bracket " << bracket.path << "@" << formatFixed(bracket.ev, 1) << " left out: " << why << "\n";
+    };
+    std::vector<BracketOption> brackets = options_.brackets;
+    // Brightest first: each frame's exposure is checked against the previous
+    // one, with which it shares the most well-exposed pixels.
+    std::stable_sort(brackets.begin(), brackets.end(), [](const auto& a, const auto& b) { return a.ev > b.ev; });
+    const ImageRGB8* previous = &frame_rgb_;
+    double previous_ev = 0.0;
+    for (const BracketOption& bracket : brackets) {
+      const cv::Mat bgr = cv::imread(bracket.path, cv::IMREAD_COLOR);
+      if (bgr.empty()) {
+        std::error_code ec;
+        refuse(bracket, fs::exists(bracket.path, ec) ? "not a readable image" : "no such file");
+        continue;
+      }
+      if (bgr.cols != frame_rgb_.width || bgr.rows != frame_rgb_.height) {
+        refuse(bracket, "it is " + sizeText(bgr.cols, bgr.rows) + ", --frame is " + sizeText(frame_rgb_.width, frame_rgb_.height));
+        continue;
+      }
+      Candidate candidate{bracket.path, bracket.ev, {}};
+      candidate.rgb.resize(bgr.cols, bgr.rows);
+      cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, candidate.rgb.pixels.data());
+      cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+      const BallCodes codes = ballCodes(candidate.rgb);
+      if (codes.measured == 0) {
+        refuse(bracket, codes.clipped > 0 ? "the ball is clipped everywhere in it" : "the ball is black everywhere in it");
+        continue;
+      }
+      // The camera must not have moved: where the tag is bright enough to
+      // be found, the ball must be where the reference frame has it.
+      std::vector<std::uint8_t> luma;
+      lumaFromRgb(candidate.rgb, luma);
+      tracking::TagTracker tracker(tagDetectorSettings(settings_, rig_), rig_, camera_);
+      const tracking::TagTrackResult track = tracker.track(luma.data(), candidate.rgb.width, candidate.rgb.height,
+                                                           candidate.rgb.width);
+      std::string pose_check = "tag too dark to find: pose not checked";
+      if (track.found) {
+        const ibl::ProbeOutline there =
+            ibl::computeProbeOutline(ibl::MirrorBallView{camera_, track.pose, rig_.probe_center_w, rig_.probe_radius_m});
+        const double moved_px = glm::length(there.center_px - outline_.center_px);
+        if (moved_px > kBracketMaxBallShiftPx) {
+          refuse(bracket, "the camera moved: the ball is " + formatFixed(moved_px, 2) + " px from where --frame has it");
+          continue;
+        }
+        pose_check = "ball within " + formatFixed(moved_px, 2) + " px of --frame's";
+      }
+      // The exposure the pixels show against the one claimed.
+      const std::optional<double> ratio = ibl::measureExposureRatio(*previous, candidate.rgb, merge);
+      Json entry = {{"path", bracket.path}, {"ev", bracket.ev}, {"used", true}, {"pose", pose_check}};
+      if (ratio) {
+        const double measured_ev = previous_ev + std::log2(*ratio);
+        entry["measured_ev"] = measured_ev;
+        if (std::abs(measured_ev - bracket.ev) > 0.5) {
+          refuse(bracket, "its pixels say EV " + formatFixed(measured_ev, 1) + ", not " + formatFixed(bracket.ev, 1));
+          continue;
+        }
+      } else {
+        entry["measured_ev"] = nullptr;  // nothing well exposed in both frames: not checked
+      }
+      frames.push_back(entry);
+      accepted.push_back(std::move(candidate));
+      previous = &accepted.back().rgb;
+      previous_ev = bracket.ev;
+    }
+    Json hdr = {{"frames", frames}};
+    if (accepted.empty()) {
+      hdr["method"] = "none";
+      hdr["status"] = "no usable bracket frame: the 8-bit map stands";
+      result_.json["hdr"] = hdr;
+      return;
+    }
+    std::vector<ibl::BracketFrame> bracket_frames{{&frame_rgb_, 0.0}};
+    for (const Candidate& candidate : accepted) bracket_frames.push_back({&candidate.rgb, candidate.ev});
+    const ibl::HdrMergeResult merged = ibl::mergeBracket(bracket_frames, merge);
+    ibl::ProbeToCubeParams params;
+    params.face_size = reflection_->face_size;
+    params.probe_reflectance = rig_.probe_reflectance;
+    params.camera_transfer = merge.camera_transfer;
+    params.samples_per_axis = 4;  // a sun smaller than a rim pixel is caught, not hit or missed
+    hdr_reflection_ = ibl::probeRadianceToCubeMap(*view_, merged.linear, params);
+    long still_clipped = 0;
+    forEachBallPixel([&](int x, int y) { still_clipped += merged.still_clipped[static_cast<size_t>(y * frame_rgb_.width + x)]; });
+    hdr["method"] = "bracket";
+    hdr["status"] = still_clipped > 0 ? "merged; " + std::to_string(still_clipped) +
+                                            " ball pixels clipped even in the shortest exposure (a lower bound there)"
+                                      : "merged";
+    hdr["still_clipped_ball_px"] = still_clipped;
+    hdr["ms"] = msSince(start);
+    result_.json["hdr"] = hdr;
+    // The irradiance from the HDR map; the 8-bit one kept beside it.
+    result_.json["irradiance_8bit"] = result_.json["irradiance"];
+    Json entries = Json::array();
+    for (const Json& old : result_.json["irradiance_8bit"]) {
+      const glm::dvec3 normal(old["normal"][0].get<double>(), old["normal"][1].get<double>(), old["normal"][2].get<double>());
+      entries.push_back({{"normal", old["normal"]},
+                         {"rgb", vec3Json(ibl::irradianceFromCubeMap(*hdr_reflection_, normal))},
+                         {"seen", old["seen"]}});
+    }
+    result_.json["irradiance"] = entries;
+  }
+
+  struct BallCodes {
+    long measured = 0;  // ball pixels with every channel between dark and clip
+    long clipped = 0;   // ... with some channel clipped
+  };
+  BallCodes ballCodes(const ImageRGB8& image) const {
+    const ibl::HdrMergeSettings merge;
+    BallCodes codes;
+    forEachBallPixel([&](int x, int y) {
+      const std::uint8_t* p = image.row(y) + 3 * x;
+      const int high = std::max({p[0], p[1], p[2]}), low = std::min({p[0], p[1], p[2]});
+      if (high >= merge.clip_code) ++codes.clipped;
+      if (low > merge.dark_code && high < merge.clip_code) ++codes.measured;
+    });
+    return codes;
+  }
+  // The pixels inside the ball's outline (its bounding box, inside the
+  // circle of its area-equivalent radius).
+  template <typename Visit>
+  void forEachBallPixel(Visit visit) const {
+    const int x0 = std::max(0, static_cast<int>(std::floor(outline_.min_px.x)));
+    const int x1 = std::min(frame_rgb_.width - 1, static_cast<int>(std::ceil(outline_.max_px.x)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(outline_.min_px.y)));
+    const int y1 = std::min(frame_rgb_.height - 1, static_cast<int>(std::ceil(outline_.max_px.y)));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x)
+        if (glm::length(glm::dvec2(x, y) - outline_.center_px) <= outline_.radius_px) visit(x, y);
+  }
+
   // The dome of lights and the dominant light, as `run` fits them at a
-  // recalibration, from the reflection map (settings: the `lights` section).
+  // recalibration, from the reflection map (settings: the `lights` section);
+  // from the HDR map when a bracket gave one (nothing in it is clipped).
   void fitLights() {
-    dome_ = ibl::fitLightDome(*reflection_, &reflection_validity_, settings_.lights.dome);
-    const ibl::DominantLight dominant = ibl::findDominantLight(
-        *reflection_, &reflection_validity_, dome_, 1.0 / rig_.probe_reflectance, settings_.lights.dome);
+    const ibl::CubeMapRGB& map = hdr_reflection_ ? *hdr_reflection_ : *reflection_;
+    const double clip_level = hdr_reflection_ ? std::numeric_limits<double>::infinity() : 1.0 / rig_.probe_reflectance;
+    dome_ = ibl::fitLightDome(map, &reflection_validity_, settings_.lights.dome);
+    const ibl::DominantLight dominant =
+        ibl::findDominantLight(map, &reflection_validity_, dome_, clip_level, settings_.lights.dome);
     Json lights = Json::array();
     for (const ibl::DomeLight& light : dome_)
       lights.push_back({{"direction", vec3Json(light.direction_w)},
@@ -620,6 +782,7 @@ class Analyzer {
   std::unique_ptr<pipeline::CameraFrameTexture> frame_texture_;
   std::unique_ptr<pipeline::EnvironmentMaps> maps_;
   std::optional<ibl::CubeMapRGB> reflection_;
+  std::optional<ibl::CubeMapRGB> hdr_reflection_;  // from --bracket
   std::optional<ibl::CubeMapRGB> diffuse_;
   std::vector<float> reflection_validity_;
   std::vector<float> diffuse_validity_;

@@ -96,25 +96,6 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
   return options;
 }
 
-AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
-  AnalyzeOptions options;
-  auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
-  parseFlags(args,
-             {{"--frame", into(options.frame_path)},
-              {"--camera", into(options.camera_path)},
-              {"--rig", into(options.rig_path)},
-              {"--out", into(options.out_dir)},
-              {"--config", into(options.config_path)}},
-             {}, "analyze");
-  // No defaults for these: analysing a frame with some other camera's
-  // calibration, or writing over someone's folder, gives plausible nonsense.
-  if (options.frame_path.empty()) throw UsageError("analyze needs --frame FILE (the camera frame to analyse)");
-  if (options.camera_path.empty()) throw UsageError("analyze needs --camera camera.yaml (the calibration of the camera that took it)");
-  if (options.rig_path.empty()) throw UsageError("analyze needs --rig rig.yaml");
-  if (options.out_dir.empty()) throw UsageError("analyze needs --out DIR (where analysis.json and the pictures go)");
-  return options;
-}
-
 namespace {
 
 // Comma-separated finite numbers, exactly `count` of them (or 1 when
@@ -141,6 +122,45 @@ std::vector<double> parseNumberList(const std::string& flag, const std::string& 
 
 }  // namespace
 
+namespace {
+
+// FILE@EV, the EV after the last '@' (a file name may hold one too).
+BracketOption parseBracket(const std::string& flag, const std::string& text) {
+  const std::size_t at = text.rfind('@');
+  if (at == std::string::npos || at == 0 || at + 1 == text.size())
+    throw UsageError("flag " + flag + ": expected FILE@EV (the same view, EV stops from --frame's exposure, e.g. "
+                     "under3.png@-3), got '" + text + "'");
+  BracketOption bracket;
+  bracket.path = text.substr(0, at);
+  bracket.ev = parseNumberList(flag, text.substr(at + 1), 1, false, "FILE@EV with EV a number of stops")[0];
+  if (std::abs(bracket.ev) > 24.0 || bracket.ev == 0.0)
+    throw UsageError("flag " + flag + ": EV must be non-zero and within +-24 stops, got '" + text + "'");
+  return bracket;
+}
+
+}  // namespace
+
+AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
+  AnalyzeOptions options;
+  auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
+  parseFlags(args,
+             {{"--frame", into(options.frame_path)},
+              {"--camera", into(options.camera_path)},
+              {"--rig", into(options.rig_path)},
+              {"--out", into(options.out_dir)},
+              {"--config", into(options.config_path)},
+              {"--bracket", [&](auto& f, auto& v) { options.brackets.push_back(parseBracket(f, v)); }}},
+             {}, "analyze");
+  // No defaults for these: analysing a frame with some other camera's
+  // calibration, or writing over someone's folder, gives plausible nonsense.
+  if (options.frame_path.empty()) throw UsageError("analyze needs --frame FILE (the camera frame to analyse)");
+  if (options.camera_path.empty()) throw UsageError("analyze needs --camera camera.yaml (the calibration of the camera that took it)");
+  if (options.rig_path.empty()) throw UsageError("analyze needs --rig rig.yaml");
+  if (options.out_dir.empty()) throw UsageError("analyze needs --out DIR (where analysis.json and the pictures go)");
+  return options;
+}
+
+
 RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
   RenderOptions options;
   auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
@@ -151,6 +171,7 @@ RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
               {"--rig", into(options.frame.rig_path)},
               {"--out", into(options.frame.out_dir)},
               {"--config", into(options.frame.config_path)},
+              {"--bracket", [&](auto& f, auto& v) { options.frame.brackets.push_back(parseBracket(f, v)); }},
               {"--object", [&](auto& f, auto& v) { requireChoice(f, v, {"sphere", "box"}); options.object = v; }},
               {"--radius",
                [&](auto& f, auto& v) {

@@ -39,12 +39,19 @@ RunOptions parseRunOptions(const std::vector<std::string>& args);
 
 // Flags of `probelight analyze`: one frame in, what the system sees out.
 // All but config_path are required.
+// --bracket FILE@EV: the same view as --frame, EV stops from its exposure.
+struct BracketOption {
+  std::string path;
+  double ev = 0.0;
+};
+
 struct AnalyzeOptions {
   std::string frame_path;   // the camera frame (PNG, JPEG, ...)
   std::string camera_path;  // camera.yaml of the camera that took it
   std::string rig_path;     // rig.yaml
   std::string out_dir;      // analysis.json and the pictures go here
   std::string config_path;  // probelight.yaml (optional)
+  std::vector<BracketOption> brackets;  // --bracket, repeatable: an exposure bracket
 };
 
 // Parses the flags after `probelight analyze`. Throws UsageError.

@@ -48,7 +48,6 @@ struct PoseCamFromWorld {
   glm::dvec3 cameraCenterWorld() const { return -glm::transpose(R_cam_from_world) * t_cam_from_world; }
 };
 
-// Tightly packed 8-bit RGB image (camera-encoded, sRGB by default).
 // An 8-bit plane read in place (the detector's luma).
 struct LumaView {
   const std::uint8_t* data = nullptr;
@@ -57,6 +56,7 @@ struct LumaView {
   int stride = 0;  // bytes per row
 };
 
+// Tightly packed 8-bit RGB image (camera-encoded, sRGB by default).
 struct ImageRGB8 {
   int width = 0;
   int height = 0;
@@ -69,6 +69,25 @@ struct ImageRGB8 {
   }
   std::uint8_t* row(int y) { return pixels.data() + static_cast<size_t>(y) * static_cast<size_t>(width) * 3u; }
   const std::uint8_t* row(int y) const { return pixels.data() + static_cast<size_t>(y) * static_cast<size_t>(width) * 3u; }
+  bool empty() const { return width <= 0 || height <= 0; }
+};
+
+// Linear RGB floats, row-major: a radiance image merged from an exposure
+// bracket, in the reference exposure's camera linear units (may exceed 1).
+struct ImageRGBF {
+  int width = 0;
+  int height = 0;
+  std::vector<glm::vec3> pixels;
+
+  void resize(int w, int h) {
+    width = w;
+    height = h;
+    pixels.assign(static_cast<size_t>(w) * static_cast<size_t>(h), glm::vec3(0.0f));
+  }
+  glm::vec3& at(int x, int y) { return pixels[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)]; }
+  const glm::vec3& at(int x, int y) const {
+    return pixels[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)];
+  }
   bool empty() const { return width <= 0 || height <= 0; }
 };
 

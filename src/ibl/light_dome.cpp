@@ -398,19 +398,15 @@ glm::dvec3 domeIrradiance(const std::vector<DomeLight>& lights, const glm::dvec3
   return sum;
 }
 
-DominantLight findDominantLight(const CubeMapRGB& radiance, const std::vector<float>* validity,
-                                const std::vector<DomeLight>& lights, double clip_level,
-                                const LightDomeSettings& settings) {
-  DominantLight dominant;
-  if (lights.empty()) return dominant;
-  const HemisphereGrid grid = resample(radiance, validity, settings, clip_level);
+namespace {
 
-  // Clipped blobs: 4-connected, wrapping in azimuth.
-  const std::size_t cells = grid.clipped.size();
+// 4-connected regions of the cells where `mask` is set, wrapping in azimuth.
+std::vector<std::vector<std::size_t>> connectedBlobs(const HemisphereGrid& grid, const std::vector<std::uint8_t>& mask) {
+  const std::size_t cells = mask.size();
   std::vector<int> label(cells, -1);
   std::vector<std::vector<std::size_t>> blobs;
   for (std::size_t start = 0; start < cells; ++start) {
-    if (!grid.clipped[start] || label[start] >= 0) continue;
+    if (!mask[start] || label[start] >= 0) continue;
     const int id = static_cast<int>(blobs.size());
     blobs.emplace_back();
     std::queue<std::size_t> open;
@@ -428,13 +424,27 @@ DominantLight findDominantLight(const CubeMapRGB& radiance, const std::vector<fl
       for (const auto& [c, r] : neighbours) {
         if (r < 0 || r >= grid.height) continue;
         const std::size_t j = grid.index(c, r);
-        if (grid.clipped[j] && label[j] < 0) {
+        if (mask[j] && label[j] < 0) {
           label[j] = id;
           open.push(j);
         }
       }
     }
   }
+  return blobs;
+}
+
+}  // namespace
+
+DominantLight findDominantLight(const CubeMapRGB& radiance, const std::vector<float>* validity,
+                                const std::vector<DomeLight>& lights, double clip_level,
+                                const LightDomeSettings& settings) {
+  DominantLight dominant;
+  if (lights.empty()) return dominant;
+  const HemisphereGrid grid = resample(radiance, validity, settings, clip_level);
+
+  std::vector<std::vector<std::size_t>> blobs = connectedBlobs(grid, grid.clipped);
+  const std::size_t cells = grid.clipped.size();
   double best_solid = 0.0;
   int best = -1;
   for (std::size_t b = 0; b < blobs.size(); ++b) {
@@ -456,16 +466,29 @@ DominantLight findDominantLight(const CubeMapRGB& radiance, const std::vector<fl
     }
   }
   if (!dominant.found) {
-    // No clipping: the direction of peak radiance (cells of ~1.4 degrees,
-    // each the mean of 4 samples), where a lamp or the sun is.
+    // No clipping: the source is the region at least half as bright as the
+    // brightest cell, 4-connected; of several, the one carrying the most
+    // power; its direction the luminance-weighted centre. A sun is a few
+    // cells, a soft box its whole face, whose brightest cell alone could sit
+    // anywhere on it.
     double peak = 0.0;
-    for (std::size_t i = 0; i < cells; ++i)
-      if (luminance(grid.radiance[i]) > peak) {
-        peak = luminance(grid.radiance[i]);
-        dominant.direction_w = directionAt(grid.azimuthAt(static_cast<double>(i % grid.width) + 0.5),
-                                           grid.elevationAt(static_cast<double>(i / grid.width) + 0.5));
+    for (std::size_t i = 0; i < cells; ++i) peak = std::max(peak, luminance(grid.radiance[i]));
+    std::vector<std::uint8_t> bright(cells, 0);
+    for (std::size_t i = 0; i < cells; ++i) bright[i] = peak > 0.0 && luminance(grid.radiance[i]) >= 0.5 * peak;
+    double best_power = 0.0;
+    for (const std::vector<std::size_t>& blob : connectedBlobs(grid, bright)) {
+      double power = 0.0;
+      glm::dvec3 centre(0.0);
+      for (std::size_t i : blob) {
+        power += luminance(grid.radiance[i]) * grid.solid_angle[i];
+        centre += luminance(grid.radiance[i]) * grid.moment[i];
+      }
+      if (power > best_power && glm::length(centre) > 0.0) {
+        best_power = power;
+        dominant.direction_w = glm::normalize(centre);
         dominant.found = true;
       }
+    }
   }
   if (dominant.found) {
     const auto nearest = std::max_element(lights.begin(), lights.end(), [&](const DomeLight& a, const DomeLight& b) {

@@ -92,8 +92,12 @@ glm::dvec3 domeIrradiance(const std::vector<DomeLight>& lights, const glm::dvec3
 // (tests/accuracy): 1.7 degrees in the simulated sun_sky, 13 degrees in the
 // real Kerner sky, whose clipped blob is 0.5 sr and lopsided. Weighting the
 // centroid toward the blob's deepest cells moved it by under a degree
-// either way, so it is not done. Without clipping, the direction of peak
-// radiance. The colour is the rgb of the dome light nearest the direction.
+// either way, so it is not done. Without clipping (an HDR map from an
+// exposure bracket, or a dim room), the source is the 4-connected region at
+// least half as bright as the brightest cell that carries the most power,
+// and its direction the luminance-weighted centre: a sun is a few cells, a
+// soft box its whole face, whose brightest cell could sit anywhere on it.
+// The colour is the rgb of the dome light nearest the direction.
 struct DominantLight {
   bool found = false;
   glm::dvec3 direction_w{0.0, 0.0, 1.0};

@@ -33,27 +33,66 @@ glm::dvec3 sampleEncodedBilinear(const ImageRGB8& image, const glm::dvec2& pixel
   return glm::mix(top, bottom, fv);
 }
 
+// Same, for a linear float image.
+glm::dvec3 sampleLinearBilinear(const ImageRGBF& image, const glm::dvec2& pixel) {
+  const double u_floor = std::floor(pixel.x);
+  const double v_floor = std::floor(pixel.y);
+  const double fu = pixel.x - u_floor;
+  const double fv = pixel.y - v_floor;
+  const int x0 = std::clamp(static_cast<int>(u_floor), 0, image.width - 1);
+  const int x1 = std::clamp(static_cast<int>(u_floor) + 1, 0, image.width - 1);
+  const int y0 = std::clamp(static_cast<int>(v_floor), 0, image.height - 1);
+  const int y1 = std::clamp(static_cast<int>(v_floor) + 1, 0, image.height - 1);
+  auto fetch = [&image](int x, int y) { return glm::dvec3(image.at(x, y)); };
+  const glm::dvec3 top = glm::mix(fetch(x0, y0), fetch(x1, y0), fu);
+  const glm::dvec3 bottom = glm::mix(fetch(x0, y1), fetch(x1, y1), fu);
+  return glm::mix(top, bottom, fv);
+}
+
+// Every texel whose direction the ball shows gets sampleLinear(pixel) /
+// reflectance; the blind spot stays 0.
+template <typename SampleLinear>
+CubeMapRGB ballToCube(const MirrorBallView& view, const ProbeToCubeParams& params, SampleLinear sample_linear) {
+  CubeMapRGB cube(params.face_size);
+  const double inverse_reflectance = params.probe_reflectance > 0.0 ? 1.0 / params.probe_reflectance : 0.0;
+  const int k = std::max(1, params.samples_per_axis);
+  const double size = params.face_size;
+  for (int face = 0; face < kCubeFaceCount; ++face)
+    for (int y = 0; y < params.face_size; ++y)
+      for (int x = 0; x < params.face_size; ++x) {
+        glm::dvec3 sum(0.0);
+        int seen = 0;
+        for (int j = 0; j < k; ++j)
+          for (int i = 0; i < k; ++i) {
+            const glm::dvec3 direction_w =
+                k == 1 ? cubeTexelCenterDirection(face, x, y, params.face_size)
+                       : cubeCoordToDirection({face, (x + (i + 0.5) / k) / size, (y + (j + 0.5) / k) / size});
+            const auto pixel = reflectedDirectionToPixel(view, direction_w, params.normal_iterations);
+            if (!pixel) continue;  // the blind spot
+            sum += sample_linear(*pixel);
+            ++seen;
+          }
+        if (seen > 0) cube.texel(face, x, y) = glm::vec3(sum / static_cast<double>(seen) * inverse_reflectance);
+      }
+  return cube;
+}
+
 }  // namespace
 
 CubeMapRGB probeImageToCubeMap(const MirrorBallView& view, const ImageRGB8& image, const ProbeToCubeParams& params) {
-  CubeMapRGB cube(params.face_size);
-  if (image.empty()) return cube;
-  const double inverse_reflectance = params.probe_reflectance > 0.0 ? 1.0 / params.probe_reflectance : 0.0;
-  for (int face = 0; face < kCubeFaceCount; ++face) {
-    for (int y = 0; y < params.face_size; ++y) {
-      for (int x = 0; x < params.face_size; ++x) {
-        const glm::dvec3 direction_w = cubeTexelCenterDirection(face, x, y, params.face_size);
-        const auto pixel = reflectedDirectionToPixel(view, direction_w, params.normal_iterations);
-        if (!pixel) continue;  // blind spot: stays 0
-        const glm::dvec3 encoded = sampleEncodedBilinear(image, *pixel);
-        const CameraTransfer& transfer = params.camera_transfer;
-        const glm::dvec3 linear{decodeCameraValue(transfer, encoded.r), decodeCameraValue(transfer, encoded.g),
-                                decodeCameraValue(transfer, encoded.b)};
-        cube.texel(face, x, y) = glm::vec3(linear * inverse_reflectance);
-      }
-    }
-  }
-  return cube;
+  if (image.empty()) return CubeMapRGB(params.face_size);
+  const CameraTransfer& transfer = params.camera_transfer;
+  return ballToCube(view, params, [&](const glm::dvec2& pixel) {
+    // Encoded values are interpolated, then decoded: what the GPU stage does.
+    const glm::dvec3 encoded = sampleEncodedBilinear(image, pixel);
+    return glm::dvec3{decodeCameraValue(transfer, encoded.r), decodeCameraValue(transfer, encoded.g),
+                      decodeCameraValue(transfer, encoded.b)};
+  });
+}
+
+CubeMapRGB probeRadianceToCubeMap(const MirrorBallView& view, const ImageRGBF& linear, const ProbeToCubeParams& params) {
+  if (linear.empty()) return CubeMapRGB(params.face_size);
+  return ballToCube(view, params, [&](const glm::dvec2& pixel) { return sampleLinearBilinear(linear, pixel); });
 }
 
 }  // namespace probelight::ibl

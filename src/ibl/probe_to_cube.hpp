@@ -12,6 +12,12 @@ struct ProbeToCubeParams {
   int face_size = 64;
   double probe_reflectance = 1.0;
   int normal_iterations = 4;  // fixed-point steps, the same count the shader unrolls
+  // Each texel is the mean of samples_per_axis^2 directions spread over it
+  // (1: its centre, as the GPU stage does). Near the ball's rim one texel
+  // spans many pixels; a light smaller than a pixel there (the sun in a
+  // merged HDR image) is then caught by some sample instead of being hit or
+  // missed whole by the centre.
+  int samples_per_axis = 1;
   CameraTransfer camera_transfer;  // how the image's values decode to linear light
 };
 
@@ -24,5 +30,10 @@ struct ProbeToCubeParams {
 // as projectToPixel returns. A GL texture is therefore sampled at
 // texcoord = (pixel + 0.5) / size. Edges are clamped.
 CubeMapRGB probeImageToCubeMap(const MirrorBallView& view, const ImageRGB8& image, const ProbeToCubeParams& params);
+
+// Same for a linear radiance image (an exposure bracket merged by
+// ibl/hdr_bracket): sampled bilinearly in linear values, divided by the
+// reflectance, unbounded. camera_transfer is not used.
+CubeMapRGB probeRadianceToCubeMap(const MirrorBallView& view, const ImageRGBF& linear, const ProbeToCubeParams& params);
 
 }  // namespace probelight::ibl

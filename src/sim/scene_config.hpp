@@ -88,9 +88,11 @@ struct SceneConfig {
   double fixed_exposure = 1.0;  // used when auto_exposure is false
   double noise_sigma_code = 1.5;  // Gaussian, in 8-bit code values, added after sRGB encoding
   int supersample_per_axis = 2;   // n x n regular sub-pixel samples per pixel
-  // Pixels that an edge crosses (object silhouettes, tag cells) are
-  // integrated over their area with this many jittered samples per axis,
-  // as a sensor does; 0 turns it off (regular samples only).
+  // Pixels that an edge crosses (object silhouettes, tag cells), and every
+  // pixel showing the mirror ball (where a sun's reflection is smaller than
+  // a regular sub-sample), are integrated over their area with this many
+  // jittered samples per axis, as a sensor does; 0 turns it off (regular
+  // samples only).
   int edge_samples_per_axis = 8;
   std::uint64_t seed = 1;         // noise and random camera poses
   int render_threads = 2;

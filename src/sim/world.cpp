@@ -1102,12 +1102,15 @@ struct World::Impl {
   }
 
   // render()'s sensor model for a prepared frame state.
-  void renderFrame(const FrameState& fs, std::uint64_t frame_index, ImageRGB8& out) const {
+  // `exposure_ev`: stops from the scene's exposure (a bracket frame).
+  void renderFrame(const FrameState& fs, std::uint64_t frame_index, ImageRGB8& out, double exposure_ev = 0.0) const {
     out.resize(scene.camera.width_px, scene.camera.height_px);
-    const double scale = exposure;
+    const double scale = exposure * std::exp2(exposure_ev);
     const float sigma = static_cast<float>(scene.noise_sigma_code);
     const std::vector<float>& gaussian = gaussianTable();
-    const std::uint64_t frame_salt = splitMix64(scene.seed ^ splitMix64(frame_index));
+    std::uint64_t frame_salt = splitMix64(scene.seed ^ splitMix64(frame_index));
+    // Each exposure of a bracket has noise of its own, as a sensor's frames do.
+    if (exposure_ev != 0.0) frame_salt = splitMix64(frame_salt + static_cast<std::uint64_t>(std::llround(exposure_ev * 1024.0)));
     std::uint8_t* pixels = out.pixels.data();
     traceFrame(fs, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
       // Noise is a function of (seed, frame, pixel) only, so threads and
@@ -1144,7 +1147,8 @@ struct World::Impl {
   // samples see different edge classes (an edge crosses it: a straight line
   // through a square always separates two of its corners) is re-integrated
   // with n_edge x n_edge jittered (stratified) samples: unbiased, with a
-  // coverage noise of about 0.3 / n_edge^1.5 px on a straight edge.
+  // coverage noise of about 0.3 / n_edge^1.5 px on a straight edge. Pixels
+  // showing the ball are too (see below).
   template <typename Emit>
   void traceFrame(const FrameState& fs, Emit emit) const {
     const int width = scene.camera.width_px, height = scene.camera.height_px;
@@ -1179,7 +1183,14 @@ struct World::Impl {
                                   edge_n > 0 ? &sample_class : nullptr);
             edge = edge || sample_class != k;
           }
-          if (edge) {
+          // The ball squeezes the whole environment into a few hundred
+          // pixels: a sun's reflection there is far smaller than the
+          // regular sub-sample spacing and would be hit or missed whole (a
+          // factor of several in its energy). A sensor integrates over the
+          // pixel, so ball pixels are integrated like edge pixels.
+          const bool shows_ball =
+              edge_n > 0 && std::find(objects.begin(), objects.end(), SceneObject::kProbe) != objects.end();
+          if (edge || shows_ball) {
             // Jitter from the pixel index alone: the same frame renders the same bytes.
             objects.resize(static_cast<size_t>(edge_n) * edge_n);
             sum = glm::dvec3(0.0);
@@ -1316,9 +1327,9 @@ FrameTruth World::truth(std::uint64_t frame_index) const {
   return truth;
 }
 
-void World::render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth) const {
+void World::render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth, double exposure_ev) const {
   const Impl& w = *impl_;
-  w.renderFrame(w.frameState(frame_index), frame_index, out);
+  w.renderFrame(w.frameState(frame_index), frame_index, out, exposure_ev);
   truth = this->truth(frame_index);
 }
 

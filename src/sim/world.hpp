@@ -61,7 +61,10 @@ class World {
 
   // Renders frame `frame_index` (8-bit sRGB, noise included) and its truth.
   // Thread-safe and deterministic: the same index gives the same bytes.
-  void render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth) const;
+  // `exposure_ev` shortens (< 0) or lengthens the exposure by that many
+  // stops, as a bracket frame; the truth stays in the scene exposure's
+  // camera linear units.
+  void render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth, double exposure_ev = 0.0) const;
   FrameTruth truth(std::uint64_t frame_index) const;
   PoseCamFromWorld pose(std::uint64_t frame_index) const;
   double exposure() const;

@@ -1,0 +1,229 @@
+// Light past the 8-bit ceiling, from an exposure bracket: the simulated
+// camera takes the same view at EV 0, -3, -6, ... (until the ball no longer
+// clips), the frames are merged into one radiance image (ibl/hdr_bracket),
+// projected into a cube map, and measured against the simulator's full-HDR
+// truth (not the clipped one): irradiance at the 14 normals of
+// analysis.json and the dominant light's direction. The same figures from
+// the EV 0 frame alone are printed beside them.
+//
+// Views where a strong light lies in the ball's blind spot (within 25 deg of
+// the direction straight behind the ball, as the camera sees it) are
+// reported apart: no single view of a ball can see it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "ibl/hdr_bracket.hpp"
+#include "ibl/irradiance.hpp"
+#include "ibl/light_dome.hpp"
+#include "ibl/probe_outline.hpp"
+#include "ibl/probe_to_cube.hpp"
+#include "sim/scene_config.hpp"
+#include "sim/world.hpp"
+#include "tracking/tag_tracker.hpp"
+
+namespace probelight {
+namespace {
+
+double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+
+std::vector<glm::dvec3> fourteenNormals() {
+  std::vector<glm::dvec3> normals = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int x : {1, -1})
+    for (int y : {1, -1})
+      for (int z : {1, -1}) normals.push_back(glm::normalize(glm::dvec3(x, y, z)));
+  return normals;
+}
+
+// Evenly spread directions (Fibonacci sphere), each standing for the same
+// solid angle.
+std::vector<glm::dvec3> sphereDirections(int count) {
+  std::vector<glm::dvec3> directions;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < count; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / count;
+    const double r = std::sqrt(1.0 - z * z);
+    directions.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
+  }
+  return directions;
+}
+
+struct LightTruth {
+  // The dominant source: over the upper hemisphere, the 4-connected region
+  // at least half as bright as the brightest direction that carries the
+  // most power, and its luminance-weighted centre. The same definition as
+  // the pipeline's, evaluated on the true radiance at 0.5 deg.
+  glm::dvec3 dominant_w{0.0, 0.0, 1.0};
+  double blind_share = 0.0;  // share of all light within 25 deg of the blind direction
+};
+
+LightTruth lightTruth(const sim::World& world, const glm::dvec3& blind_w) {
+  LightTruth truth;
+  double total = 0.0, blind = 0.0;
+  for (const glm::dvec3& direction : sphereDirections(40000)) {
+    const double lum = luminance(world.radiance(direction, 0).hdr);
+    total += lum;
+    if (glm::dot(direction, blind_w) > std::cos(glm::radians(25.0))) blind += lum;
+  }
+  truth.blind_share = total > 0.0 ? blind / total : 0.0;
+  const int width = 720, height = 180;  // 0.5 deg cells, row 0 at the horizon
+  std::vector<double> lum(static_cast<size_t>(width * height)), solid(lum.size());
+  std::vector<glm::dvec3> direction(lum.size());
+  double peak = 0.0;
+  for (int row = 0; row < height; ++row)
+    for (int column = 0; column < width; ++column) {
+      const double azimuth = 2.0 * M_PI * (column + 0.5) / width, elevation = 0.5 * M_PI * (row + 0.5) / height;
+      const size_t i = static_cast<size_t>(row * width + column);
+      direction[i] = {std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation)};
+      lum[i] = luminance(world.radiance(direction[i], 0).hdr);
+      solid[i] = std::cos(elevation);  // proportional to the cell's solid angle
+      peak = std::max(peak, lum[i]);
+    }
+  std::vector<int> label(lum.size(), -1);
+  double best_power = 0.0;
+  for (size_t start = 0; start < lum.size(); ++start) {
+    if (lum[start] < 0.5 * peak || label[start] >= 0) continue;
+    std::vector<size_t> open{start};
+    label[start] = static_cast<int>(start);
+    double power = 0.0;
+    glm::dvec3 centre(0.0);
+    while (!open.empty()) {
+      const size_t i = open.back();
+      open.pop_back();
+      power += lum[i] * solid[i];
+      centre += lum[i] * solid[i] * direction[i];
+      const int column = static_cast<int>(i) % width, row = static_cast<int>(i) / width;
+      const int neighbours[4][2] = {{(column + 1) % width, row}, {(column + width - 1) % width, row}, {column, row + 1}, {column, row - 1}};
+      for (const auto& [c, r] : neighbours) {
+        if (r < 0 || r >= height) continue;
+        const size_t j = static_cast<size_t>(r * width + c);
+        if (lum[j] >= 0.5 * peak && label[j] < 0) {
+          label[j] = static_cast<int>(start);
+          open.push_back(j);
+        }
+      }
+    }
+    if (power > best_power) {
+      best_power = power;
+      truth.dominant_w = glm::normalize(centre);
+    }
+  }
+  return truth;
+}
+
+struct ViewCase {
+  const char* name;
+  double distance_m, elevation_deg, azimuth_deg;
+};
+
+TEST(HdrBracketAccuracy, IrradianceAndDominantLightAgainstTheHdrTruth) {
+  const std::vector<std::string> environments = {
+      "sun_sky", "overcast", "studio", std::string(PROBELIGHT_TEST_DATA_DIR) + "/env/KernerEnvLatLong.exr",
+      std::string(PROBELIGHT_TEST_DATA_DIR) + "/env/StageEnvLatLong.exr"};
+  const ViewCase views[] = {{"near", 0.45, 45.0, -90.0}, {"far", 0.8, 30.0, -70.0}, {"side", 0.55, 38.0, 160.0}};
+  const ibl::HdrMergeSettings merge;
+  std::printf("\n| environment | view | bracket EVs | still clipped | irradiance vs HDR: bracket / 8-bit | "
+              "dominant light: bracket / 8-bit |\n|---|---|---|---|---|---|\n");
+  double bracket_sum = 0.0, ldr_sum = 0.0, worst_dominant_deg = 0.0;
+  int counted = 0, blind = 0;
+  for (const std::string& environment : environments) {
+    for (const ViewCase& view : views) {
+      sim::SceneConfig scene = sim::defaultScene();
+      scene.environment = environment;
+      scene.camera_path.name = "static";
+      scene.camera_path.distance_m = view.distance_m;
+      scene.camera_path.elevation_deg = view.elevation_deg;
+      scene.camera_path.azimuth_start_deg = view.azimuth_deg;
+      const sim::World world(scene);
+      ImageRGB8 reference;
+      FrameTruth truth;
+      world.render(0, reference, truth);
+      ASSERT_TRUE(truth.probe_fully_visible && truth.tag_fully_visible) << environment << " " << view.name;
+      std::vector<std::uint8_t> luma;
+      lumaFromRgb(reference, luma);
+      tracking::TagTracker tracker(tracking::TagDetectorSettings{}, scene.rig, scene.camera);
+      const tracking::TagTrackResult track = tracker.track(luma.data(), reference.width, reference.height, reference.width);
+      ASSERT_TRUE(track.found) << track.status;
+      const ibl::MirrorBallView ball{scene.camera, track.pose, scene.rig.probe_center_w, scene.rig.probe_radius_m};
+      const ibl::ProbeOutline outline = ibl::computeProbeOutline(ball);
+
+      // Shorter exposures, 3 stops apart, until the ball shows no clipped
+      // pixel (or 15 stops down).
+      std::vector<ImageRGB8> images{reference};
+      std::vector<double> evs{0.0};
+      auto ballClips = [&](const ImageRGB8& image) {
+        const int r = static_cast<int>(outline.radius_px);
+        for (int y = std::max(0, static_cast<int>(outline.center_px.y) - r);
+             y <= std::min(image.height - 1, static_cast<int>(outline.center_px.y) + r); ++y)
+          for (int x = std::max(0, static_cast<int>(outline.center_px.x) - r);
+               x <= std::min(image.width - 1, static_cast<int>(outline.center_px.x) + r); ++x)
+            for (int c = 0; c < 3; ++c)
+              if (image.row(y)[3 * x + c] >= merge.clip_code) return true;
+        return false;
+      };
+      while (ballClips(images.back()) && evs.back() > -15.0) {
+        evs.push_back(evs.back() - 3.0);
+        ImageRGB8 shorter;
+        FrameTruth ignored;
+        world.render(0, shorter, ignored, evs.back());
+        images.push_back(std::move(shorter));
+      }
+      std::vector<ibl::BracketFrame> frames;
+      for (size_t i = 0; i < images.size(); ++i) frames.push_back({&images[i], evs[i]});
+      const ibl::HdrMergeResult merged = ibl::mergeBracket(frames, merge);
+      long still_clipped = 0;
+      for (const std::uint8_t flag : merged.still_clipped) still_clipped += flag;
+
+      ibl::ProbeToCubeParams params;
+      params.face_size = 64;
+      params.probe_reflectance = scene.rig.probe_reflectance;
+      const ibl::CubeMapRGB ldr_cube = ibl::probeImageToCubeMap(ball, reference, params);
+      params.samples_per_axis = 4;
+      const ibl::CubeMapRGB hdr_cube = ibl::probeRadianceToCubeMap(ball, merged.linear, params);
+
+      double bracket_error = 0.0, ldr_error = 0.0;
+      for (const glm::dvec3& normal : fourteenNormals()) {
+        const double expected = luminance(world.irradiance(normal, 0).hdr);
+        bracket_error += std::abs(luminance(ibl::irradianceFromCubeMap(hdr_cube, normal)) - expected) / expected / 14.0;
+        ldr_error += std::abs(luminance(ibl::irradianceFromCubeMap(ldr_cube, normal)) - expected) / expected / 14.0;
+      }
+      const glm::dvec3 blind_w = glm::normalize(scene.rig.probe_center_w - track.pose.cameraCenterWorld());
+      const LightTruth light = lightTruth(world, blind_w);
+      auto dominantErrorDeg = [&](const ibl::CubeMapRGB& cube, double clip_level) {
+        const std::vector<ibl::DomeLight> dome = ibl::fitLightDome(cube, nullptr, {});
+        const ibl::DominantLight dominant = ibl::findDominantLight(cube, nullptr, dome, clip_level, {});
+        return glm::degrees(std::acos(std::clamp(glm::dot(dominant.direction_w, light.dominant_w), -1.0, 1.0)));
+      };
+      const double bracket_deg = dominantErrorDeg(hdr_cube, 1e30);
+      const double ldr_deg = dominantErrorDeg(ldr_cube, 1.0 / scene.rig.probe_reflectance);
+      const bool in_blind_spot = light.blind_share > 0.2;
+      std::string ev_list;
+      for (const double ev : evs) ev_list += (ev_list.empty() ? "" : ", ") + std::to_string(static_cast<int>(ev));
+      const std::string short_name = environment.substr(environment.find_last_of('/') + 1);
+      std::printf("| %s | %s%s | %s | %ld px | %.1f%% / %.1f%% | %.1f° / %.1f° |\n", short_name.c_str(), view.name,
+                  in_blind_spot ? " (light in the blind spot)" : "", ev_list.c_str(), still_clipped,
+                  100.0 * bracket_error, 100.0 * ldr_error, bracket_deg, ldr_deg);
+      if (in_blind_spot) {
+        ++blind;
+        continue;
+      }
+      bracket_sum += bracket_error;
+      ldr_sum += ldr_error;
+      worst_dominant_deg = std::max(worst_dominant_deg, bracket_deg);
+      ++counted;
+    }
+  }
+  std::printf("\nmean over %d views (%d blind-spot views apart): bracket %.1f%%, 8-bit %.1f%%; worst dominant "
+              "light with a bracket %.1f°\n",
+              counted, blind, 100.0 * bracket_sum / counted, 100.0 * ldr_sum / counted, worst_dominant_deg);
+  ASSERT_GE(counted, 10);
+  EXPECT_LE(bracket_sum / counted, 0.05);
+  EXPECT_LE(worst_dominant_deg, 5.0);
+}
+
+}  // namespace
+}  // namespace probelight
