@@ -34,6 +34,11 @@ uniform float u_k_reflect;
 uniform vec3 u_ambient_rgb;
 uniform vec3 u_highlight_direction_w;
 uniform vec3 u_highlight_rgb;
+// ibl::SceneLighting's clipped lights: the energy the 8-bit ball lost to
+// clipping, added to the diffuse term (E / pi, at most a few tens: mediump
+// holds it).
+uniform vec3 u_clipped_direction_w[4];
+uniform vec3 u_clipped_diffuse_rgb[4];
 
 // Rung k of the ladder: 0 mirror, 1..L glossy (at the mirror direction), L + 1 diffuse (at the normal).
 vec3 rung(float k, vec3 mirror, vec3 diffuse) {
@@ -51,6 +56,7 @@ void main() {
   float highlight = n_dot_h > 0.0 ? pow(n_dot_h, u_shininess) : 0.0;
   vec3 mirror = reflect(-to_eye, n);
   vec3 diffuse = sampleCubeBilinear(u_diffuse_map, n, u_diffuse_face_size, u_diffuse_scale).rgb;
+  for (int k = 0; k < 4; ++k) diffuse += u_clipped_diffuse_rgb[k] * max(dot(n, u_clipped_direction_w[k]), 0.0);
   // ibl::reflectionLadderBlend: exact at glossiness 0 and 1, where the other rung is not read.
   float position = (1.0 - clamp(u_glossiness, 0.0, 1.0)) * (u_glossy_levels + 1.0);
   float lower = floor(position);

@@ -24,6 +24,7 @@
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
 #include "config/rig_file.hpp"
+#include "core/apriltag_families.hpp"
 #include "gles/capabilities.hpp"
 #include "gles/egl_context.hpp"
 #include "ibl/camera_projection.hpp"
@@ -36,6 +37,7 @@
 #include "ibl/light_dome.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
+#include "ibl/white_reference.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
 #include "pipeline/ground_shadow.hpp"
@@ -190,6 +192,8 @@ class Analyzer {
     if (track_.found) measureProbe();
     if (probe_usable_) makeMaps();
     if (reflection_ && !options_.brackets.empty()) mergeBracket();
+    if (reflection_) whiteReference();
+    if (hdr_reflection_) useHdrMap();
     if (reflection_) fitLights();
     if (render_ && reflection_ && result_.status == 0) renderComposite();
     writePictures();
@@ -495,7 +499,7 @@ class Analyzer {
       hdr["method"] = "none";
       hdr["status"] = "no usable bracket frame: the 8-bit map stands";
       result_.json["hdr"] = hdr;
-      return;
+      return;  // the white border may still help
     }
     std::vector<ibl::BracketFrame> bracket_frames{{&frame_rgb_, 0.0}};
     for (const Candidate& candidate : accepted) bracket_frames.push_back({&candidate.rgb, candidate.ev});
@@ -515,7 +519,81 @@ class Analyzer {
     hdr["still_clipped_ball_px"] = still_clipped;
     hdr["ms"] = msSince(start);
     result_.json["hdr"] = hdr;
-    // The irradiance from the HDR map; the 8-bit one kept beside it.
+  }
+
+  // The tag's white border (ibl/white_reference.hpp): read in every frame
+  // where the tag was found and reported; without a bracket (and unless
+  // --no-white-ref) the light it says the ball's clipped highlights hide
+  // is given back to them.
+  void whiteReference() {
+    const auto start = Clock::now();
+    const AprilTagFamilyHandle family = createAprilTagFamily(rig_.tag_family);
+    if (!family) return;  // loadRigFile checked the name
+    const ibl::WhiteRing ring = ibl::tagWhiteRing(family->width_at_border, family->reversed_border, rig_.tag_size_m);
+    ibl::WhiteBorderSettings border_settings;
+    border_settings.camera_transfer = settings_.maps.stages.camera_transfer;
+    const ibl::RgbPixelReader read_frame = [&](int x, int y) {
+      const std::uint8_t* p = frame_rgb_.row(y) + 3 * x;
+      return glm::u8vec3(p[0], p[1], p[2]);
+    };
+    const ibl::WhiteBorderReading reading = ibl::readWhiteBorder(camera_, track_.pose, ring, read_frame, border_settings);
+    clipped_mask_ = ibl::clippedTexelMask(*view_, read_frame, border_settings.clip_code, reflection_->face_size);
+    Json border = {{"status", ibl::toString(reading.status)},
+                   {"message", reading.message},
+                   {"tag_white_albedo", rig_.tag_white_albedo},
+                   {"patches", reading.patches},
+                   {"patches_lit", reading.patches_lit},
+                   {"patches_shadowed", reading.patches_shadowed},
+                   {"patches_clipped", reading.patches_clipped},
+                   {"patches_dark", reading.patches_dark}};
+    if (reading.status == ibl::WhiteBorderStatus::kMeasured) border["linear_rgb"] = vec3Json(reading.linear_rgb);
+    // What it would add, measured on a copy; used only when nothing better.
+    ibl::CubeMapRGB corrected = *reflection_;
+    const ibl::WhiteReferenceResult result = ibl::correctClippedWithWhiteBorder(
+        corrected, &reflection_validity_, reading, rig_.tag_white_albedo, clipLevel(), &clipped_mask_);
+    border["correction"] = {{"status", ibl::toString(result.status)},
+                            {"message", result.message},
+                            {"border_irradiance_rgb", vec3Json(result.border_irradiance_rgb)},
+                            {"ball_irradiance_rgb", vec3Json(result.map_irradiance_rgb)},
+                            {"added_radiance_rgb", vec3Json(result.added_radiance_rgb)},
+                            {"clipped_upper_sr", result.clipped_upper_sr},
+                            {"clipped_lower_sr", result.clipped_lower_sr}};
+    border["ms"] = msSince(start);
+    Json& hdr = result_.json["hdr"];
+    hdr["white_border"] = border;
+    if (hdr_reflection_) return;  // a bracket measured the light itself
+    const bool usable = result.status == ibl::WhiteReferenceStatus::kCorrected;
+    if (!options_.white_reference) {
+      hdr["method"] = "none";
+      hdr["status"] = "--no-white-ref: the 8-bit map stands";
+    } else if (usable) {
+      hdr["method"] = "white_border";
+      hdr["status"] = result.message;
+      hdr_reflection_ = std::move(corrected);
+    } else {
+      hdr["method"] = "none";
+      hdr["status"] = "white border not used: " + result.message;
+      // Only a real problem is worth a warning: nothing clipped needs nothing.
+      if (result.status == ibl::WhiteReferenceStatus::kBorderDarker ||
+          (result.status == ibl::WhiteReferenceStatus::kBorderUnusable && result.clipped_upper_sr > 0.0))
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: " << (render_ ? "render" : "analyze")
+             << ": warning: the ball's highlights clip and the tag's white border cannot restore them: "
+             << result.message << "\n";
+    }
+  }
+
+  // Texels at or above this clipped in the camera (the merge's clip code,
+  // through the ball's reflectance).
+  double clipLevel() const {
+    const ibl::HdrMergeSettings merge;
+    return ibl::decodeCameraValue(settings_.maps.stages.camera_transfer, merge.clip_code / 255.0) /
+           rig_.probe_reflectance;
+  }
+
+  // A bracket or the white border gave light beyond the 8-bit map: the
+  // irradiance from it (the 8-bit one kept beside it) and the clipped
+  // lights the object's shading adds to the 8-bit diffuse map.
+  void useHdrMap() {
     result_.json["irradiance_8bit"] = result_.json["irradiance"];
     Json entries = Json::array();
     for (const Json& old : result_.json["irradiance_8bit"]) {
@@ -525,6 +603,12 @@ class Analyzer {
                          {"seen", old["seen"]}});
     }
     result_.json["irradiance"] = entries;
+    clipped_lights_ = ibl::clippedLights(*hdr_reflection_, *reflection_, &reflection_validity_, clipLevel(),
+                                         &clipped_mask_, ibl::SceneLighting::kMaxClippedLights);
+    Json lights = Json::array();
+    for (const ibl::ClippedLight& light : clipped_lights_)
+      lights.push_back({{"direction", vec3Json(light.direction_w)}, {"irradiance_rgb", vec3Json(light.irradiance_rgb)}});
+    result_.json["hdr"]["clipped_lights"] = lights;
   }
 
   struct BallCodes {
@@ -609,12 +693,18 @@ class Analyzer {
     lambertian.albedo = glm::vec3(render_->albedo);
     lambertian.k_diffuse = 1.0f;
     bool drawn = shadow.drawOnCameraImage(camera_, track_.pose, *frame_texture_, error);
+    // The 8-bit maps as the kiosk keeps them, plus the light they clipped.
+    ibl::SceneLighting lighting;
+    for (std::size_t k = 0; k < clipped_lights_.size() && k < lighting.clipped_direction_w.size(); ++k) {
+      lighting.clipped_direction_w[k] = glm::vec3(clipped_lights_[k].direction_w);
+      lighting.clipped_diffuse_rgb[k] = glm::vec3(clipped_lights_[k].irradiance_rgb / 3.14159265358979323846);
+    }
     if (drawn && caster.shape == ibl::ShadowCaster::Shape::kSphere)
       drawn = compositor.drawSphereObject(camera_, track_.pose, caster.boundingCentre(), caster.radius_m, lambertian,
-                                          ibl::SceneLighting{}, *maps_, error);
+                                          lighting, *maps_, error);
     else if (drawn)
-      drawn = compositor.drawMeshObject(camera_, track_.pose, pipeline::boxMesh(caster), lambertian,
-                                        ibl::SceneLighting{}, *maps_, error);
+      drawn = compositor.drawMeshObject(camera_, track_.pose, pipeline::boxMesh(caster), lambertian, lighting,
+                                        *maps_, error);
     ImageRGB8 composite;
     if (!drawn || !target.readRGB(composite, error)) {
       result_.fail(1, "GPU: " + error);
@@ -782,7 +872,9 @@ class Analyzer {
   std::unique_ptr<pipeline::CameraFrameTexture> frame_texture_;
   std::unique_ptr<pipeline::EnvironmentMaps> maps_;
   std::optional<ibl::CubeMapRGB> reflection_;
-  std::optional<ibl::CubeMapRGB> hdr_reflection_;  // from --bracket
+  std::optional<ibl::CubeMapRGB> hdr_reflection_;  // from --bracket, or the 8-bit map corrected by the white border
+  std::vector<ibl::ClippedLight> clipped_lights_;
+  std::vector<std::uint8_t> clipped_mask_;  // texels holding a clipped ball pixel of --frame  // what hdr_reflection_ holds beyond the 8-bit map's clip
   std::optional<ibl::CubeMapRGB> diffuse_;
   std::vector<float> reflection_validity_;
   std::vector<float> diffuse_validity_;

@@ -125,6 +125,7 @@ AppSettings loadAppSettings(const std::string& path) {
       lights.readBool("refit_when_light_changes", light_settings.refit_when_light_changes);
   light_settings.refit_change_fraction =
       lights.readDouble("refit_change_fraction", light_settings.refit_change_fraction, Range::openClosed(0.0, 10.0));
+  light_settings.white_reference = lights.readBool("white_reference", light_settings.white_reference);
   lights.rejectUnknownFields();
 
   ConfigReader button = file.section("button");

@@ -65,6 +65,11 @@ struct LightsConfig {
   // ground's light by less makes shadows that differ by less than that.
   bool refit_when_light_changes = false;
   double refit_change_fraction = 0.1;
+  // At each fit, the tag's white border (rig.yaml tag_white_albedo) gives
+  // the ball's clipped highlights the light they hide
+  // (ibl/white_reference.hpp): the dome is fitted from the corrected map and
+  // the object shaded with the clipped lights until the next fit.
+  bool white_reference = true;
 };
 
 struct ObjectConfig {

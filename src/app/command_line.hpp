@@ -52,6 +52,10 @@ struct AnalyzeOptions {
   std::string out_dir;      // analysis.json and the pictures go here
   std::string config_path;  // probelight.yaml (optional)
   std::vector<BracketOption> brackets;  // --bracket, repeatable: an exposure bracket
+  // --no-white-ref: without a bracket, keep the ball's 8-bit map as it is
+  // instead of giving its clipped highlights the light the tag's white
+  // border says they hide (to compare the two).
+  bool white_reference = true;
 };
 
 // Parses the flags after `probelight analyze`. Throws UsageError.

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -32,6 +33,7 @@
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
 #include "config/rig_file.hpp"
+#include "core/apriltag_families.hpp"
 #include "display/display.hpp"
 #include "gles/capabilities.hpp"
 #include "ibl/cube_map.hpp"
@@ -39,6 +41,7 @@
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
 #include "ibl/spherical_harmonics.hpp"
+#include "ibl/white_reference.hpp"
 #include "input/button_source.hpp"
 #include "input/status_led.hpp"
 #include "pipeline/camera_frame_texture.hpp"
@@ -588,7 +591,7 @@ class Kiosk {
     const bool maps_current = decision.update || decision.skip == MapSkipReason::kImageUnchanged;
     switch (machine_.onFrame(maps_current)) {
       case FrameOutcome::kFitLights:
-        if (const int failed = fitLights(frame_number); failed != 0) return failed;
+        if (const int failed = fitLights(frame_number, frame, track.found ? &view : nullptr); failed != 0) return failed;
         break;
       case FrameOutcome::kCalibrationFailed:
         report_.count("calibrations_failed");
@@ -704,7 +707,9 @@ class Kiosk {
 
   // A recalibration has seen enough good frames: fit the lights from the
   // current diffuse map.
-  int fitLights(std::uint64_t frame_number) {
+  // `frame` and `view` (null when the tag was not found in this frame): the
+  // frame the fit is made on, for the tag's white border.
+  int fitLights(std::uint64_t frame_number, const FrameBuffer& frame, const ibl::MirrorBallView* view) {
     std::string error;
     std::vector<float> validity;
     const std::optional<ibl::CubeMapRGB> reflection = maps_.readReflection(error, &validity);
@@ -712,10 +717,27 @@ class Kiosk {
     const LightsConfig& config = inputs_.settings.lights;
     std::vector<ibl::DomeLight> dome;
     ibl::DominantLight light;
+    std::vector<ibl::ClippedLight> clipped_lights;
     {
       StageTimer timer(report_, "fit_lights");
-      dome = ibl::fitLightDome(*reflection, &validity, config.dome);
-      light = ibl::findDominantLight(*reflection, &validity, dome, 1.0 / inputs_.rig.probe_reflectance, config.dome);
+      const ibl::CubeMapRGB* fit_map = &*reflection;
+      double clip_level = 1.0 / inputs_.rig.probe_reflectance;
+      std::optional<ibl::CubeMapRGB> corrected;
+      if (config.white_reference && view) {
+        corrected = *reflection;
+        if (whiteReference(frame, *view, validity, *corrected, clipped_lights)) {
+          fit_map = &*corrected;
+          clip_level = std::numeric_limits<double>::infinity();  // nothing in it is clipped any more
+        }
+      }
+      dome = ibl::fitLightDome(*fit_map, &validity, config.dome);
+      light = ibl::findDominantLight(*fit_map, &validity, dome, clip_level, config.dome);
+    }
+    lighting_.clipped_direction_w = {};
+    lighting_.clipped_diffuse_rgb = {};
+    for (std::size_t k = 0; k < clipped_lights.size() && k < lighting_.clipped_direction_w.size(); ++k) {
+      lighting_.clipped_direction_w[k] = glm::vec3(clipped_lights[k].direction_w);
+      lighting_.clipped_diffuse_rgb[k] = glm::vec3(clipped_lights[k].irradiance_rgb / 3.14159265358979323846);
     }
     light_transition_.retarget(dome, frame_time_s_);
     // What checkLightChange compares with later: the same estimate, from the
@@ -755,6 +777,54 @@ class Kiosk {
     return 0;
   }
 
+  // lights.white_reference: the tag's white border in the fit's frame says
+  // the light on the ground; what the ball's 8-bit map falls short of it goes
+  // to its clipped texels (in `corrected`), and from there into the clipped
+  // lights the object is shaded with. False (the map stays as it was) when
+  // the border cannot be used; the reason is in the report and, when the
+  // ball did clip, in a warning.
+  bool whiteReference(const FrameBuffer& frame, const ibl::MirrorBallView& view, const std::vector<float>& validity,
+                      ibl::CubeMapRGB& corrected, std::vector<ibl::ClippedLight>& clipped_lights) {
+    const AprilTagFamilyHandle family = createAprilTagFamily(inputs_.rig.tag_family);
+    if (!family) return false;
+    const ibl::WhiteRing ring =
+        ibl::tagWhiteRing(family->width_at_border, family->reversed_border, inputs_.rig.tag_size_m);
+    ibl::WhiteBorderSettings settings;
+    settings.camera_transfer = inputs_.settings.maps.stages.camera_transfer;
+    const ibl::RgbPixelReader read = [&frame](int x, int y) { return frame.rgbAt(x, y); };
+    const ibl::WhiteBorderReading reading = ibl::readWhiteBorder(view.camera, view.pose, ring, read, settings);
+    const std::vector<std::uint8_t> mask = ibl::clippedTexelMask(view, read, settings.clip_code, corrected.face_size);
+    const double clip_level =
+        ibl::decodeCameraValue(settings.camera_transfer, settings.clip_code / 255.0) / inputs_.rig.probe_reflectance;
+    const ibl::CubeMapRGB original = corrected;
+    const ibl::WhiteReferenceResult result =
+        ibl::correctClippedWithWhiteBorder(corrected, &validity, reading, inputs_.rig.tag_white_albedo, clip_level, &mask);
+    const bool used = result.status == ibl::WhiteReferenceStatus::kCorrected;
+    if (used) clipped_lights = ibl::clippedLights(corrected, original, &validity, clip_level, &mask);
+    report_.count(std::string("white_border_") + ibl::toString(result.status));
+    nlohmann::json lights = nlohmann::json::array();
+    for (const ibl::ClippedLight& l : clipped_lights)
+      lights.push_back({{"direction", {l.direction_w.x, l.direction_w.y, l.direction_w.z}},
+                        {"irradiance_rgb", {l.irradiance_rgb.r, l.irradiance_rgb.g, l.irradiance_rgb.b}}});
+    report_.extra["white_border"] = {{"border", ibl::toString(reading.status)},
+                                     {"correction", ibl::toString(result.status)},
+                                     {"message", result.message},
+                                     {"patches_lit", reading.patches_lit},
+                                     {"patches", reading.patches},
+                                     {"clipped_upper_sr", result.clipped_upper_sr},
+                                     {"border_irradiance_rgb", {result.border_irradiance_rgb.r, result.border_irradiance_rgb.g,
+                                                                result.border_irradiance_rgb.b}},
+                                     {"ball_irradiance_rgb", {result.map_irradiance_rgb.r, result.map_irradiance_rgb.g,
+                                                              result.map_irradiance_rgb.b}},
+                                     {"clipped_lights", lights}};
+    if (!used && (result.status == ibl::WhiteReferenceStatus::kBorderDarker ||
+                  (result.status == ibl::WhiteReferenceStatus::kBorderUnusable && result.clipped_upper_sr > 0.0)))
+      log_ << logPrefix(LogPriority::kWarning)
+           << "probelight: the ball's highlights clip and the tag's white border cannot restore them: " << result.message
+           << "\n";
+    return used;
+  }
+
   // The last good lighting from the state directory: shown from the first
   // frame (the start-up fit then fades from it), and what a long press goes
   // back to. A missing file is normal (first boot); an unreadable one is
@@ -781,6 +851,9 @@ class Kiosk {
 
   void showStoredLighting(double now_s) {
     light_transition_.retarget(stored_lighting_->lights, now_s);
+    // The stored state holds the dome, not the last fit's clipped lights.
+    lighting_.clipped_direction_w = {};
+    lighting_.clipped_diffuse_rgb = {};
     lighting_.highlight_direction_w = glm::vec3(stored_lighting_->dominant.direction_w);
     lighting_.highlight_rgb = glm::vec3(stored_lighting_->dominant.rgb);
   }

@@ -1,5 +1,8 @@
 #include "capture/frame_source.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace probelight {
 
 int planeCount(PixelLayout layout) {
@@ -11,6 +14,34 @@ bool isYuv(PixelLayout layout) { return layout == PixelLayout::kI420 || layout =
 LumaView FrameBuffer::luma() const {
   if (isYuv(layout)) return LumaView{yuv.data[0], width_px, height_px, yuv.stride_bytes[0]};
   return LumaView{luma_storage.data(), width_px, height_px, width_px};
+}
+
+glm::u8vec3 FrameBuffer::rgbAt(int x, int y) const {
+  if (!isYuv(layout)) {
+    const std::uint8_t* p = rgb.row(y) + 3 * x;
+    return {p[0], p[1], p[2]};
+  }
+  const std::uint8_t luma_code = yuv.data[0][static_cast<std::size_t>(y) * yuv.stride_bytes[0] + x];
+  std::uint8_t cb = 128, cr = 128;
+  const std::size_t chroma_row = static_cast<std::size_t>(y / 2);
+  if (layout == PixelLayout::kNv12) {
+    const std::uint8_t* pair = yuv.data[1] + chroma_row * yuv.stride_bytes[1] + 2 * (x / 2);
+    cb = pair[0];
+    cr = pair[1];
+  } else {
+    cb = yuv.data[1][chroma_row * yuv.stride_bytes[1] + x / 2];
+    cr = yuv.data[2][chroma_row * yuv.stride_bytes[2] + x / 2];
+  }
+  const YcbcrDecoding decoding = ycbcrDecoding(yuv.encoding);
+  const float code[3] = {luma_code / 255.0f, cb / 255.0f, cr / 255.0f};
+  glm::u8vec3 out;
+  for (int row = 0; row < 3; ++row) {
+    // Column-major: element (row, column) at matrix[column * 3 + row].
+    float value = decoding.offset[row];
+    for (int column = 0; column < 3; ++column) value += decoding.matrix[column * 3 + row] * code[column];
+    out[row] = static_cast<std::uint8_t>(std::lround(255.0f * std::clamp(value, 0.0f, 1.0f)));
+  }
+  return out;
 }
 
 void FrameBuffer::finishRgb() {

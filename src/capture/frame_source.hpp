@@ -79,6 +79,10 @@ struct FrameBuffer {
 
   // What tag detection reads: the Y' plane, or the computed luma.
   LumaView luma() const;
+  // Encoded R'G'B' codes of pixel (x, y) inside the frame, decoded from
+  // Y'CbCr for YUV layouts (for the few hundred pixels the CPU reads, such
+  // as the tag's white border; the GPU converts whole frames).
+  glm::u8vec3 rgbAt(int x, int y) const;
   // Makes this an RGB frame of `rgb`'s size whose luma is computed from it.
   void finishRgb();
   // Makes this a kI420 or kNv12 frame of the given size in `yuv_storage`

@@ -54,6 +54,8 @@ void validateRigGeometry(const RigGeometry& rig, const std::string& path) {
     fail("probe_radius", formatNumber(rig.probe_radius_m) + " is out of range, must be > 0");
   if (!(rig.probe_reflectance > 0 && rig.probe_reflectance <= 1))
     fail("probe_reflectance", formatNumber(rig.probe_reflectance) + " is out of range, must be in (0, 1]");
+  if (!(rig.tag_white_albedo > 0 && rig.tag_white_albedo <= 1))
+    fail("tag_white_albedo", formatNumber(rig.tag_white_albedo) + " is out of range, must be in (0, 1]");
 }
 
 RigGeometry loadRigFile(const std::string& path) {
@@ -66,6 +68,7 @@ RigGeometry loadRigFile(const std::string& path) {
   rig.probe_center_w = file.readVec3("probe_center", kRequired);
   rig.probe_radius_m = file.readDouble("probe_radius", kRequired, Range::above(0.0));
   rig.probe_reflectance = file.readDouble("probe_reflectance", 1.0, Range::openClosed(0.0, 1.0));
+  rig.tag_white_albedo = file.readDouble("tag_white_albedo", 0.85, Range::openClosed(0.0, 1.0));
   file.rejectUnknownFields();
   validateRigGeometry(rig, path);
   return rig;
@@ -81,6 +84,7 @@ void saveRigFile(const std::string& path, const RigGeometry& rig) {
   storage << "probe_center" << "[:" << rig.probe_center_w.x << rig.probe_center_w.y << rig.probe_center_w.z << "]";
   storage << "probe_radius" << rig.probe_radius_m;
   storage << "probe_reflectance" << rig.probe_reflectance;
+  storage << "tag_white_albedo" << rig.tag_white_albedo;
   storage.release();
 }
 

@@ -21,7 +21,8 @@ const std::vector<TagFamilyInfo>& knownTagFamilies();
 // Fields: tag_family (one of knownTagFamilies), tag_id (0..code_count-1),
 // tag_size (metres, outer edge of the black border, > 0), probe_center
 // ([x, y, z] in W, metres), probe_radius (m, > 0), probe_reflectance
-// (in (0, 1], default 1). Throws ConfigError.
+// (in (0, 1], default 1), tag_white_albedo (the printed white's diffuse
+// reflectance, in (0, 1], default 0.85). Throws ConfigError.
 RigGeometry loadRigFile(const std::string& path);
 
 // Throws ConfigError when `rig` would not load back or cannot be written.

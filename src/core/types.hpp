@@ -36,6 +36,9 @@ struct RigGeometry {
   glm::dvec3 probe_center_w{0.12, 0.0, 0.08};
   double probe_radius_m = 0.03;
   double probe_reflectance = 1.0;  // 0..1; chrome is about 0.6-0.8
+  // Diffuse reflectance of the tag's printed white (ibl/white_reference.hpp):
+  // plain office paper under laser toner is about 0.8-0.9.
+  double tag_white_albedo = 0.85;
 };
 
 // Rigid transform taking world points into the camera frame:

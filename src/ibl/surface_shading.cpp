@@ -28,7 +28,9 @@ glm::vec3 shadeSurface(const glm::vec3& normal_w, const glm::vec3& to_eye_w, con
   const glm::vec3 half_vector = glm::normalize(lighting.highlight_direction_w + to_eye_w);
   const float highlight = std::pow(std::max(glm::dot(normal_w, half_vector), 0.0f), material.shininess);
   const glm::vec3 mirror_w = glm::reflect(-to_eye_w, normal_w);
-  const glm::vec3 diffuse = diffuse_map.face_size > 0 ? diffuse_map.sampleBilinear(glm::dvec3(normal_w)) : glm::vec3(0);
+  glm::vec3 diffuse = diffuse_map.face_size > 0 ? diffuse_map.sampleBilinear(glm::dvec3(normal_w)) : glm::vec3(0);
+  for (int k = 0; k < SceneLighting::kMaxClippedLights; ++k)
+    diffuse += lighting.clipped_diffuse_rgb[k] * std::max(0.0f, glm::dot(normal_w, lighting.clipped_direction_w[k]));
   const int levels = static_cast<int>(glossy_maps.size());
   const auto rung = [&](int k) -> glm::vec3 {
     if (k >= levels + 1) return diffuse;

@@ -18,6 +18,7 @@
 // glossiness is roughly linear in log(width).
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -53,6 +54,14 @@ struct SceneLighting {
   glm::vec3 ambient_rgb{0.0f};                    // A_l
   glm::vec3 highlight_direction_w{0.0f, 0.0f, 1.0f};  // unit, toward the light
   glm::vec3 highlight_rgb{0.0f};                  // S_l
+  // The light that clipped in the ball's 8-bit image (a sun, a lamp), as
+  // found by a bracket or the tag's white border (ibl/white_reference.hpp:
+  // clippedLights). Added to the diffuse map's value at n as
+  // clipped_diffuse_rgb * max(0, n . clipped_direction_w), in the diffuse
+  // map's units (E / pi). Unused entries are 0.
+  static constexpr int kMaxClippedLights = 4;
+  std::array<glm::vec3, kMaxClippedLights> clipped_direction_w{};
+  std::array<glm::vec3, kMaxClippedLights> clipped_diffuse_rgb{};
 };
 
 // normal_w and to_eye_w are unit vectors in W. Maps are sampled bilinearly.

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "ibl/camera_projection.hpp"
+#include "ibl/probe_outline.hpp"
 
 namespace probelight::ibl {
 namespace {
@@ -200,9 +201,40 @@ WhiteBorderReading readWhiteBorder(const CameraIntrinsics& camera, const PoseCam
   return reading;
 }
 
+std::vector<std::uint8_t> clippedTexelMask(const MirrorBallView& view, const RgbPixelReader& read_pixel, int clip_code,
+                                           int face_size) {
+  std::vector<std::uint8_t> mask(static_cast<std::size_t>(kCubeFaceCount) * face_size * face_size, 0);
+  const ProbeOutline outline = computeProbeOutline(view);
+  if (!outline.valid) return mask;
+  const int x0 = std::max(0, static_cast<int>(std::floor(outline.min_px.x)));
+  const int x1 = std::min(view.camera.width_px - 1, static_cast<int>(std::ceil(outline.max_px.x)));
+  const int y0 = std::max(0, static_cast<int>(std::floor(outline.min_px.y)));
+  const int y1 = std::min(view.camera.height_px - 1, static_cast<int>(std::ceil(outline.max_px.y)));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const glm::u8vec3 code = read_pixel(x, y);
+      if (std::max({code.r, code.g, code.b}) < clip_code) continue;
+      const std::optional<glm::dvec3> direction = pixelToReflectedDirection(view, glm::dvec2(x, y));
+      if (!direction) continue;
+      const CubeTexelCoord coord = directionToCubeCoord(*direction);
+      const int tx = std::clamp(static_cast<int>(coord.s * face_size), 0, face_size - 1);
+      const int ty = std::clamp(static_cast<int>(coord.t * face_size), 0, face_size - 1);
+      mask[static_cast<std::size_t>(coord.face) * face_size * face_size + static_cast<std::size_t>(ty) * face_size + tx] = 1;
+    }
+  return mask;
+}
+
+namespace {
+bool maskSays(const std::vector<std::uint8_t>* mask, int face, std::size_t index, int face_size) {
+  const std::size_t per_face = static_cast<std::size_t>(face_size) * face_size;
+  return mask != nullptr && mask->size() == kCubeFaceCount * per_face &&
+         (*mask)[static_cast<std::size_t>(face) * per_face + index] != 0;
+}
+}  // namespace
+
 WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::vector<float>* validity,
                                                    const WhiteBorderReading& border, double tag_white_albedo,
-                                                   double clip_level) {
+                                                   double clip_level, const std::vector<std::uint8_t>* clipped_mask) {
   WhiteReferenceResult result;
   const int n = map.face_size;
   glm::dvec3 e_map(0.0);
@@ -215,7 +247,8 @@ WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::v
         const glm::dvec3 omega = cubeTexelCenterDirection(face, x, y, n);
         const double solid_angle = cubeTexelSolidAngle(x, y, n);
         const glm::vec3& radiance = map.faces[face][index];
-        const bool clipped = std::max({radiance.r, radiance.g, radiance.b}) >= clip_level;
+        const bool clipped = std::max({radiance.r, radiance.g, radiance.b}) >= clip_level ||
+                             maskSays(clipped_mask, face, index, n);
         if (omega.z > 0.0) {
           e_map += glm::dvec3(radiance) * omega.z * solid_angle;
           if (clipped) {
@@ -261,7 +294,8 @@ WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::v
         const std::size_t index = static_cast<std::size_t>(y) * n + x;
         if (!isValid(validity, face, index, n) || cubeTexelCenterDirection(face, x, y, n).z <= 0.0) continue;
         glm::vec3& radiance = map.faces[face][index];
-        if (std::max({radiance.r, radiance.g, radiance.b}) >= clip_level) radiance += added;
+        if (std::max({radiance.r, radiance.g, radiance.b}) >= clip_level || maskSays(clipped_mask, face, index, n))
+          radiance += added;
       }
   result.status = WhiteReferenceStatus::kCorrected;
   result.message = "the border reads " + percent(ratio) + " of the ball's irradiance; the rest given to " +
@@ -270,7 +304,8 @@ WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::v
 }
 
 std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMapRGB& clipped_map,
-                                        const std::vector<float>* validity, double clip_level, int max_lights,
+                                        const std::vector<float>* validity, double clip_level,
+                                        const std::vector<std::uint8_t>* clipped_mask, int max_lights,
                                         double cluster_radius_rad) {
   struct Texel {
     glm::dvec3 omega;
@@ -285,8 +320,13 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
         const std::size_t index = static_cast<std::size_t>(y) * n + x;
         if (!isValid(validity, face, index, n)) continue;
         const glm::vec3& seen = clipped_map.faces[face][index];
-        if (std::max({seen.r, seen.g, seen.b}) < clip_level) continue;
-        const glm::dvec3 extra = glm::max(glm::dvec3(true_map.faces[face][index]) - glm::dvec3(seen), glm::dvec3(0.0));
+        const glm::vec3& real = true_map.faces[face][index];
+        // Where the truth is beyond the clip, the 8-bit map's value there
+        // (clipped, or a sun smeared over a texel) is not the light.
+        if (std::max({seen.r, seen.g, seen.b}) < clip_level && std::max({real.r, real.g, real.b}) < clip_level &&
+            !maskSays(clipped_mask, face, index, n))
+          continue;
+        const glm::dvec3 extra = glm::max(glm::dvec3(real) - glm::dvec3(seen), glm::dvec3(0.0));
         const double solid_angle = cubeTexelSolidAngle(x, y, n);
         Texel texel{cubeTexelCenterDirection(face, x, y, n), extra * solid_angle, luminance(extra) * solid_angle};
         if (texel.energy > 0.0) texels.push_back(texel);

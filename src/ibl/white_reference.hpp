@@ -29,6 +29,7 @@
 #include "core/types.hpp"
 #include "ibl/color_transfer.hpp"
 #include "ibl/cube_map.hpp"
+#include "ibl/mirror_ball.hpp"
 
 namespace probelight::ibl {
 
@@ -85,6 +86,13 @@ using RgbPixelReader = std::function<glm::u8vec3(int x, int y)>;
 WhiteBorderReading readWhiteBorder(const CameraIntrinsics& camera, const PoseCamFromWorld& pose, const WhiteRing& ring,
                                    const RgbPixelReader& read_pixel, const WhiteBorderSettings& settings);
 
+// Texels of a face_size cube whose directions hold a ball pixel that
+// clipped in the frame (some channel >= clip_code), as flags at
+// face * n^2 + y * n + x. A sun smaller than a texel clips a pixel or two
+// that the map's texel-centre sampling can step over; this cannot.
+std::vector<std::uint8_t> clippedTexelMask(const MirrorBallView& view, const RgbPixelReader& read_pixel, int clip_code,
+                                           int face_size);
+
 enum class WhiteReferenceStatus {
   kCorrected,      // the shortfall was given to the clipped texels
   kNothingClipped, // no clipped texel above the horizon: the map stands (a consistency check is reported)
@@ -111,17 +119,18 @@ struct WhiteReferenceResult {
 constexpr double kBorderDarkerTolerance = 0.10;
 
 // Corrects `map` (the ball's 8-bit map: texels whose largest channel is at
-// or above clip_level are clipped) in place. Texels with validity 0 are
-// neither counted nor changed. Upward irradiance: the upper hemisphere
-// only, as the ground sees it.
+// or above clip_level, or flagged in clipped_mask, are clipped) in place.
+// Texels with validity 0 are neither counted nor changed. Upward
+// irradiance: the upper hemisphere only, as the ground sees it.
 WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::vector<float>* validity,
                                                    const WhiteBorderReading& border, double tag_white_albedo,
-                                                   double clip_level);
+                                                   double clip_level,
+                                                   const std::vector<std::uint8_t>* clipped_mask = nullptr);
 
 // The light a clipped region really held, as a few directional lights for
-// the frame-rate shading: the texels that clip in `clipped_map` (largest
-// channel >= clip_level) take the energy `true_map` has there beyond
-// theirs, grouped greedily (brightest first) into clusters of angular
+// the frame-rate shading: the texels that clipped (largest channel >=
+// clip_level in either map, or flagged in clipped_mask) take the energy
+// `true_map` has there beyond `clipped_map`'s, grouped greedily (brightest first) into clusters of angular
 // radius cluster_radius_rad. Each light is its cluster's first moment
 // sum(dL * solid angle * omega): its irradiance is exact for every normal
 // that sees the whole cluster. At most max_lights; the rest join the
@@ -131,7 +140,8 @@ struct ClippedLight {
   glm::dvec3 irradiance_rgb{0.0};
 };
 std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMapRGB& clipped_map,
-                                        const std::vector<float>* validity, double clip_level, int max_lights = 4,
+                                        const std::vector<float>* validity, double clip_level,
+                                        const std::vector<std::uint8_t>* clipped_mask = nullptr, int max_lights = 4,
                                         double cluster_radius_rad = 0.44);
 
 }  // namespace probelight::ibl

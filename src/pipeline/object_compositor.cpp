@@ -154,6 +154,10 @@ bool ObjectCompositor::prepareShading(const gles::Program& program, const Camera
   const glm::vec3 highlight_direction = glm::normalize(lighting.highlight_direction_w);
   glUniform3fv(program.uniform("u_highlight_direction_w"), 1, glm::value_ptr(highlight_direction));
   glUniform3fv(program.uniform("u_highlight_rgb"), 1, glm::value_ptr(lighting.highlight_rgb));
+  glUniform3fv(program.uniform("u_clipped_direction_w"), ibl::SceneLighting::kMaxClippedLights,
+               glm::value_ptr(lighting.clipped_direction_w[0]));
+  glUniform3fv(program.uniform("u_clipped_diffuse_rgb"), ibl::SceneLighting::kMaxClippedLights,
+               glm::value_ptr(lighting.clipped_diffuse_rgb[0]));
 
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);

@@ -606,3 +606,96 @@ TEST_F(Analyze, BadBracketFlagsAreExit2OneLine) {
 
 }  // namespace
 }  // namespace probelight
+
+namespace probelight {
+namespace {
+
+// Without a bracket, the tag's white border (ibl/white_reference.hpp). In
+// sun and sky the 8-bit ball misses the sun (its frame's irradiance is
+// ~30% off the HDR truth); the border gives the missing light back to the
+// clipped texels, which in this world are the sun's alone, so the result
+// is as good as the sun's texel placement (a texel of 64^2: under 1.5 deg).
+// --no-white-ref leaves the 8-bit map; a border that clips or reads darker
+// than the ball (a grey print where rig.yaml says white) is not used, says
+// why, and the run still succeeds.
+class AnalyzeWhiteBorder : public Analyze {
+ protected:
+  struct Outcome {
+    nlohmann::json analysis;
+    std::string stderr_text;
+    double irradiance_error = 0.0;       // mean over the 14 normals, vs the HDR truth
+    double irradiance_8bit_error = 0.0;  // the same from the 8-bit map (when it was corrected)
+  };
+  Outcome analyze(const sim::SceneConfig& scene, const std::string& extra = "") {
+    const sim::World world(scene);
+    ImageRGB8 frame;
+    FrameTruth truth;
+    world.render(0, frame, truth);
+    const CommandResult result = run(writeInputs(scene, frame) + extra);
+    Outcome outcome;
+    EXPECT_EQ(result.exit_status, 0) << result.stderr_text;
+    outcome.analysis = readAnalysis();
+    outcome.stderr_text = result.stderr_text;
+    for (size_t k = 0; k < 14; ++k) {
+      const glm::dvec3 normal = jsonVec3(outcome.analysis["irradiance"][k]["normal"]);
+      const double expected = luminance(world.irradiance(normal, 0).hdr);
+      outcome.irradiance_error +=
+          std::abs(luminance(jsonVec3(outcome.analysis["irradiance"][k]["rgb"])) - expected) / expected / 14.0;
+      if (outcome.analysis.contains("irradiance_8bit"))
+        outcome.irradiance_8bit_error +=
+            std::abs(luminance(jsonVec3(outcome.analysis["irradiance_8bit"][k]["rgb"])) - expected) / expected / 14.0;
+    }
+    return outcome;
+  }
+};
+
+TEST_F(AnalyzeWhiteBorder, RestoresTheClippedSunAndSaysWhyWhenItCannot) {
+  const sim::SceneConfig sun_sky = sim::defaultScene();
+  {
+    const Outcome used = analyze(sun_sky);
+    const nlohmann::json& hdr = used.analysis["hdr"];
+    ASSERT_EQ(hdr["method"], "white_border") << hdr.dump(2);
+    EXPECT_EQ(hdr["white_border"]["status"], "measured");
+    EXPECT_EQ(hdr["white_border"]["patches_lit"], hdr["white_border"]["patches"]);
+    EXPECT_EQ(hdr["white_border"]["correction"]["status"], "corrected");
+    EXPECT_GE(hdr["clipped_lights"].size(), 1u);
+    EXPECT_LE(used.irradiance_error, 0.05);
+    EXPECT_GE(used.irradiance_8bit_error, 0.15) << "the 8-bit frame alone misses the sun";
+  }
+  {
+    const Outcome plain = analyze(sun_sky, " --no-white-ref");
+    EXPECT_EQ(plain.analysis["hdr"]["method"], "none");
+    EXPECT_FALSE(plain.analysis.contains("irradiance_8bit"));
+    EXPECT_GE(plain.irradiance_error, 0.15);
+    // Still read and reported, to compare.
+    EXPECT_EQ(plain.analysis["hdr"]["white_border"]["correction"]["status"], "corrected");
+  }
+  {
+    // 1.3 stops over: the border (0.5 linear at the scene's exposure) clips.
+    sim::SceneConfig bright = sun_sky;
+    bright.auto_exposure = false;
+    bright.fixed_exposure = 2.5 * sim::World(sun_sky).exposure();
+    const Outcome clipped = analyze(bright);
+    EXPECT_EQ(clipped.analysis["hdr"]["method"], "none");
+    EXPECT_EQ(clipped.analysis["hdr"]["white_border"]["status"], "clipped");
+    EXPECT_NE(clipped.analysis["hdr"]["status"].get<std::string>().find("clipped"), std::string::npos);
+    EXPECT_EQ(testing::countOccurrences(clipped.stderr_text, "white border cannot restore"), 1u) << clipped.stderr_text;
+  }
+  {
+    // The print is grey (0.18) where rig.yaml says 0.85 white: the border
+    // reads 0.18 / 0.85 of the sun-lit ground's light, less than even the
+    // clipped ball shows (it misses three quarters of it), as a border in
+    // shadow would.
+    sim::SceneConfig grey = sun_sky;
+    grey.tag_white_albedo = 0.18;
+    const Outcome darker = analyze(grey);
+    EXPECT_EQ(darker.analysis["hdr"]["method"], "none");
+    EXPECT_EQ(darker.analysis["hdr"]["white_border"]["correction"]["status"], "border_darker");
+    EXPECT_NE(darker.stderr_text.find("in shadow"), std::string::npos) << darker.stderr_text;
+    // Nothing lost: the 8-bit map's lights are fitted as before.
+    EXPECT_EQ(darker.analysis["lights"].size(), 8u);
+  }
+}
+
+}  // namespace
+}  // namespace probelight

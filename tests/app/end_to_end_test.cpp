@@ -3,6 +3,7 @@
 // composited frames, and error lines.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -577,6 +578,54 @@ TEST_F(EndToEnd, LampSwitchingOnWithAStillCameraUpdatesTheMaps) {
   const double allowed_fraction = 3.0 / lamp_change_code + 0.1;
   EXPECT_LT(after - before, allowed_fraction * (frozen_after - before))
       << "before " << before << ", after " << after << ", kept map " << frozen_after;
+}
+
+}  // namespace
+}  // namespace probelight
+
+namespace probelight {
+namespace {
+
+// lights.white_reference (on by default): at the fit, the tag's white border
+// in the fit's frame says the ground gets about four times the light the
+// 8-bit ball shows (the sun clips); the shortfall goes to the clipped texels
+// and from there into the clipped lights the object is shaded with, whose
+// upward irradiance is that shortfall. The same from YUV frames (the
+// border's pixels decoded on the CPU). Off, the report has no white_border.
+TEST_F(EndToEnd, WhiteBorderRestoresTheClippedSunAtTheFitFromRgbAndYuvFrames) {
+  auto green = [](const nlohmann::json& rgb) { return rgb[1].get<double>(); };
+  for (const std::string format : {"rgb", "yuv420"}) {
+    const fs::path config = dir_ / (format + ".yaml");
+    std::ofstream(config) << "sim:\n  pixel_format: " << format << "\n";
+    const fs::path out = dir_ / format;
+    const CommandResult result =
+        run("run --frames 20 --save-every 0 --path static --config " + config.string() + " --out " + out.string());
+    ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+    const nlohmann::json report = readReport(out);
+    ASSERT_GE(report["counters"]["calibrations_completed"].get<int>(), 1) << format;
+    const nlohmann::json& border = report["white_border"];
+    EXPECT_EQ(border["border"], "measured") << format;
+    EXPECT_EQ(border["correction"], "corrected") << border.dump();
+    ASSERT_GE(border["clipped_lights"].size(), 1u) << border.dump();
+    const double shortfall = green(border["border_irradiance_rgb"]) - green(border["ball_irradiance_rgb"]);
+    // The sun holds most of the light in sun_sky: the clipped ball misses it.
+    EXPECT_GT(shortfall, green(border["ball_irradiance_rgb"])) << border.dump();
+    double upward = 0.0;
+    for (const auto& light : border["clipped_lights"])
+      upward += green(light["irradiance_rgb"]) * std::max(0.0, light["direction"][2].get<double>());
+    // Exact for each cluster's first moment; a cluster's moment projected on
+    // its mean direction loses at most 1 - cos(25 deg) = 9.4% of it.
+    EXPECT_NEAR(upward, shortfall, 0.1 * shortfall) << border.dump();
+  }
+  const fs::path config = dir_ / "off.yaml";
+  std::ofstream(config) << "lights:\n  white_reference: false\n";
+  const fs::path out = dir_ / "off";
+  const CommandResult result =
+      run("run --frames 20 --save-every 0 --path static --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  EXPECT_GE(report["counters"]["calibrations_completed"].get<int>(), 1);
+  EXPECT_FALSE(report.contains("white_border"));
 }
 
 }  // namespace

@@ -316,12 +316,14 @@ std::vector<BadField> badFields() {
   out.push_back({"rig", rig_yaml("0.1", "[0.12, 0.0, VALUE]", "0.03", "0.7"), "probe_center"});
   out.push_back({"rig", rig_yaml("0.1", "[0.12, 0.0, 0.08]", "VALUE", "0.7"), "probe_radius"});
   out.push_back({"rig", rig_yaml("0.1", "[0.12, 0.0, 0.08]", "0.03", "VALUE"), "probe_reflectance"});
+  out.push_back({"rig", rig_yaml("0.1", "[0.12, 0.0, 0.08]", "0.03", "0.7") + "tag_white_albedo: VALUE\n",
+                 "tag_white_albedo"});
   return out;
 }
 
 TEST_F(Stress, NanOrInfInAnyFloatFieldIsOneLineAndExit2) {
   const std::vector<BadField> fields = badFields();
-  ASSERT_EQ(fields.size(), 22u + 4u + 3u + 6u + 14u + 6u);
+  ASSERT_EQ(fields.size(), 22u + 4u + 3u + 6u + 14u + 7u);
   for (const BadField& bad : fields) {
     for (const char* value : {".nan", ".inf", "-.inf"}) {
       std::string yaml = bad.yaml;

@@ -171,7 +171,7 @@ TEST(WhiteReference, ClippedLightsHoldTheMissingEnergyWhereItWas) {
   std::vector<glm::dvec3> six;
   for (int k = 0; k < 6; ++k) six.push_back(glm::dvec3(std::cos(k * kPi / 3.0) * 0.6, std::sin(k * kPi / 3.0) * 0.6, 0.8));
   const CubeMapRGB truth6 = skyWithSuns(six, 0.4, 300.0);
-  const std::vector<ClippedLight> four = clippedLights(truth6, clip(truth6, 1.0f), nullptr, 1.0, 4);
+  const std::vector<ClippedLight> four = clippedLights(truth6, clip(truth6, 1.0f), nullptr, 1.0, nullptr, 4);
   ASSERT_EQ(four.size(), 4u);
   glm::dvec3 moment(0.0), expected_moment(0.0);
   for (const ClippedLight& light : four) moment += light.irradiance_rgb.g * light.direction_w;
@@ -187,7 +187,8 @@ TEST(WhiteReference, ClippedLightsHoldTheMissingEnergyWhereItWas) {
   // at worst), so the total is kept along z exactly enough to test.
   EXPECT_NEAR(moment.z, expected_moment.z, 0.15 * expected_moment.z);
   // And nothing clipped gives no light.
-  EXPECT_TRUE(clippedLights(clipped, skyWithSuns({}, 0.4, 0.0), nullptr, 1.0).empty());
+  const CubeMapRGB overcast = skyWithSuns({}, 0.4, 0.0);
+  EXPECT_TRUE(clippedLights(overcast, overcast, nullptr, 1.0).empty());
 }
 
 // A camera looking down at the tag; each pixel's value comes from the
