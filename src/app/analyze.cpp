@@ -19,6 +19,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "app/app_settings.hpp"
+#include "app/bracket_merge.hpp"
 #include "app/log_priority.hpp"
 #include "app/stage_settings.hpp"
 #include "config/camera_file.hpp"
@@ -174,11 +175,6 @@ struct Analysis {
 
 // One analysis: each method is one step, and each leaves in `result_` what
 // it found, so that a failure part-way still reports everything before it.
-// A bracket frame whose ball sits further than this from --frame's (the
-// camera or the rig moved between exposures) would smear every edge of the
-// merged map; tag poses agree to a few hundredths of a pixel when nothing
-// moved.
-constexpr double kBracketMaxBallShiftPx = 1.0;
 
 class Analyzer {
  public:
@@ -419,104 +415,51 @@ class Analyzer {
   // by more than half a stop. With nothing left the 8-bit map stands.
   void mergeBracket() {
     const auto start = Clock::now();
-    const ibl::HdrMergeSettings merge{settings_.maps.stages.camera_transfer};
-    struct Candidate {
-      std::string path;
-      double ev;
-      ImageRGB8 rgb;
-    };
-    std::vector<Candidate> accepted;
-    Json frames = Json::array();
-    auto refuse = [&](const BracketOption& bracket, const std::string& why) {
-      frames.push_back({{"path", bracket.path}, {"ev", bracket.ev}, {"used", false}, {"reason", why}});
+    BracketSetup setup{*view_, outline_, rig_, tagDetectorSettings(settings_, rig_),
+                       ibl::HdrMergeSettings{settings_.maps.stages.camera_transfer}, reflection_->face_size};
+    auto warn = [&](const std::string& path, double ev, const std::string& why) {
       log_ << logPrefix(LogPriority::kWarning) << "probelight: " << (render_ ? "render" : "analyze") << ": warning: "
-           << "--bracket " << bracket.path << "@" << formatFixed(bracket.ev, 1) << " left out: " << why << "\n";
+           << "--bracket " << path << "@" << formatFixed(ev, 1) << " left out: " << why << "\n";
     };
-    std::vector<BracketOption> brackets = options_.brackets;
-    // Brightest first: each frame's exposure is checked against the previous
-    // one, with which it shares the most well-exposed pixels.
-    std::stable_sort(brackets.begin(), brackets.end(), [](const auto& a, const auto& b) { return a.ev > b.ev; });
-    const ImageRGB8* previous = &frame_rgb_;
-    double previous_ev = 0.0;
-    for (const BracketOption& bracket : brackets) {
+    // Files that cannot be read, or have another size, are left out here;
+    // the rest are checked and merged as `run` does its own bracket.
+    Json unread = Json::array();
+    std::vector<BracketCandidate> candidates;
+    for (const BracketOption& bracket : options_.brackets) {
       const cv::Mat bgr = cv::imread(bracket.path, cv::IMREAD_COLOR);
-      if (bgr.empty()) {
-        std::error_code ec;
-        refuse(bracket, fs::exists(bracket.path, ec) ? "not a readable image" : "no such file");
+      std::string why;
+      std::error_code ec;
+      if (bgr.empty())
+        why = fs::exists(bracket.path, ec) ? "not a readable image" : "no such file";
+      else if (bgr.cols != frame_rgb_.width || bgr.rows != frame_rgb_.height)
+        why = "it is " + sizeText(bgr.cols, bgr.rows) + ", --frame is " + sizeText(frame_rgb_.width, frame_rgb_.height);
+      if (!why.empty()) {
+        unread.push_back({{"frame", bracket.path}, {"ev", bracket.ev}, {"used", false}, {"reason", why}});
+        warn(bracket.path, bracket.ev, why);
         continue;
       }
-      if (bgr.cols != frame_rgb_.width || bgr.rows != frame_rgb_.height) {
-        refuse(bracket, "it is " + sizeText(bgr.cols, bgr.rows) + ", --frame is " + sizeText(frame_rgb_.width, frame_rgb_.height));
-        continue;
-      }
-      Candidate candidate{bracket.path, bracket.ev, {}};
+      BracketCandidate candidate{bracket.path, bracket.ev, {}};
       candidate.rgb.resize(bgr.cols, bgr.rows);
       cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, candidate.rgb.pixels.data());
       cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-      const BallCodes codes = ballCodes(candidate.rgb);
-      if (codes.measured == 0) {
-        refuse(bracket, codes.clipped > 0 ? "the ball is clipped everywhere in it" : "the ball is black everywhere in it");
-        continue;
-      }
-      // The camera must not have moved: where the tag is bright enough to
-      // be found, the ball must be where the reference frame has it.
-      std::vector<std::uint8_t> luma;
-      lumaFromRgb(candidate.rgb, luma);
-      tracking::TagTracker tracker(tagDetectorSettings(settings_, rig_), rig_, camera_);
-      const tracking::TagTrackResult track = tracker.track(luma.data(), candidate.rgb.width, candidate.rgb.height,
-                                                           candidate.rgb.width);
-      std::string pose_check = "tag too dark to find: pose not checked";
-      if (track.found) {
-        const ibl::ProbeOutline there =
-            ibl::computeProbeOutline(ibl::MirrorBallView{camera_, track.pose, rig_.probe_center_w, rig_.probe_radius_m});
-        const double moved_px = glm::length(there.center_px - outline_.center_px);
-        if (moved_px > kBracketMaxBallShiftPx) {
-          refuse(bracket, "the camera moved: the ball is " + formatFixed(moved_px, 2) + " px from where --frame has it");
-          continue;
-        }
-        pose_check = "ball within " + formatFixed(moved_px, 2) + " px of --frame's";
-      }
-      // The exposure the pixels show against the one claimed.
-      const std::optional<double> ratio = ibl::measureExposureRatio(*previous, candidate.rgb, merge);
-      Json entry = {{"path", bracket.path}, {"ev", bracket.ev}, {"used", true}, {"pose", pose_check}};
-      if (ratio) {
-        const double measured_ev = previous_ev + std::log2(*ratio);
-        entry["measured_ev"] = measured_ev;
-        if (std::abs(measured_ev - bracket.ev) > 0.5) {
-          refuse(bracket, "its pixels say EV " + formatFixed(measured_ev, 1) + ", not " + formatFixed(bracket.ev, 1));
-          continue;
-        }
-      } else {
-        entry["measured_ev"] = nullptr;  // nothing well exposed in both frames: not checked
-      }
-      frames.push_back(entry);
-      accepted.push_back(std::move(candidate));
-      previous = &accepted.back().rgb;
-      previous_ev = bracket.ev;
+      candidates.push_back(std::move(candidate));
     }
+    BracketMergeResult merged = mergeBracketProbe(
+        frame_rgb_, std::move(candidates), setup,
+        [&](const BracketCandidate& candidate, const std::string& why) { warn(candidate.label, candidate.ev, why); });
+    Json frames = unread;
+    for (const auto& entry : merged.frames) frames.push_back(Json::parse(entry.dump()));  // json to ordered_json
     Json hdr = {{"frames", frames}};
-    if (accepted.empty()) {
+    if (!merged.hdr_cube) {
       hdr["method"] = "none";
-      hdr["status"] = "no usable bracket frame: the 8-bit map stands";
+      hdr["status"] = merged.status + ": the 8-bit map stands";
       result_.json["hdr"] = hdr;
       return;  // the white border may still help
     }
-    std::vector<ibl::BracketFrame> bracket_frames{{&frame_rgb_, 0.0}};
-    for (const Candidate& candidate : accepted) bracket_frames.push_back({&candidate.rgb, candidate.ev});
-    const ibl::HdrMergeResult merged = ibl::mergeBracket(bracket_frames, merge);
-    ibl::ProbeToCubeParams params;
-    params.face_size = reflection_->face_size;
-    params.probe_reflectance = rig_.probe_reflectance;
-    params.camera_transfer = merge.camera_transfer;
-    params.samples_per_axis = 4;  // a sun smaller than a rim pixel is caught, not hit or missed
-    hdr_reflection_ = ibl::probeRadianceToCubeMap(*view_, merged.linear, params);
-    long still_clipped = 0;
-    forEachBallPixel([&](int x, int y) { still_clipped += merged.still_clipped[static_cast<size_t>(y * frame_rgb_.width + x)]; });
+    hdr_reflection_ = std::move(merged.hdr_cube);
     hdr["method"] = "bracket";
-    hdr["status"] = still_clipped > 0 ? "merged; " + std::to_string(still_clipped) +
-                                            " ball pixels clipped even in the shortest exposure (a lower bound there)"
-                                      : "merged";
-    hdr["still_clipped_ball_px"] = still_clipped;
+    hdr["status"] = merged.status;
+    hdr["still_clipped_ball_px"] = merged.still_clipped_ball_px;
     hdr["ms"] = msSince(start);
     result_.json["hdr"] = hdr;
   }
@@ -609,34 +552,6 @@ class Analyzer {
     for (const ibl::ClippedLight& light : clipped_lights_)
       lights.push_back({{"direction", vec3Json(light.direction_w)}, {"irradiance_rgb", vec3Json(light.irradiance_rgb)}});
     result_.json["hdr"]["clipped_lights"] = lights;
-  }
-
-  struct BallCodes {
-    long measured = 0;  // ball pixels with every channel between dark and clip
-    long clipped = 0;   // ... with some channel clipped
-  };
-  BallCodes ballCodes(const ImageRGB8& image) const {
-    const ibl::HdrMergeSettings merge;
-    BallCodes codes;
-    forEachBallPixel([&](int x, int y) {
-      const std::uint8_t* p = image.row(y) + 3 * x;
-      const int high = std::max({p[0], p[1], p[2]}), low = std::min({p[0], p[1], p[2]});
-      if (high >= merge.clip_code) ++codes.clipped;
-      if (low > merge.dark_code && high < merge.clip_code) ++codes.measured;
-    });
-    return codes;
-  }
-  // The pixels inside the ball's outline (its bounding box, inside the
-  // circle of its area-equivalent radius).
-  template <typename Visit>
-  void forEachBallPixel(Visit visit) const {
-    const int x0 = std::max(0, static_cast<int>(std::floor(outline_.min_px.x)));
-    const int x1 = std::min(frame_rgb_.width - 1, static_cast<int>(std::ceil(outline_.max_px.x)));
-    const int y0 = std::max(0, static_cast<int>(std::floor(outline_.min_px.y)));
-    const int y1 = std::min(frame_rgb_.height - 1, static_cast<int>(std::ceil(outline_.max_px.y)));
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x)
-        if (glm::length(glm::dvec2(x, y) - outline_.center_px) <= outline_.radius_px) visit(x, y);
   }
 
   // The dome of lights and the dominant light, as `run` fits them at a

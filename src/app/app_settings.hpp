@@ -70,6 +70,14 @@ struct LightsConfig {
   // (ibl/white_reference.hpp): the dome is fitted from the corrected map and
   // the object shaded with the clipped lights until the next fit.
   bool white_reference = true;
+  // At each fit whose frame shows the ball clipped, `run` takes shorter
+  // exposures, bracket_step_stops apart, while the ball still clips, down
+  // to bracket_max_stops under the frame's (0: no bracket), and fits the
+  // lights from them merged (the white border is then not needed). 3 stops
+  // keep two frames' well-exposed ranges overlapping (8-bit sRGB codes
+  // 6..250 span about 11 stops); 12 stops reach a sun from a sky.
+  double bracket_step_stops = 3.0;
+  double bracket_max_stops = 12.0;
 };
 
 struct ObjectConfig {

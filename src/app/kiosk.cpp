@@ -17,6 +17,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "app/app_settings.hpp"
+#include "app/bracket_merge.hpp"
 #include "app/light_transition.hpp"
 #include "app/lighting_state_machine.hpp"
 #include "app/log_priority.hpp"
@@ -421,6 +422,7 @@ class Kiosk {
          << "; keeping the last frame and reconnecting\n";
     source_->stop();
     exposure_locked_ = false;  // a new stream starts with AE running
+    if (bracket_) report_.count("brackets_cut_by_camera_loss");  // whileCameraLost finishes it
     reconnect_.onLost(monotonicNowS());
   }
 
@@ -428,6 +430,9 @@ class Kiosk {
   // being fed: the service is healthy, the camera is not) until a reconnect
   // attempt, when due, succeeds.
   int whileCameraLost() {
+    // A bracket the loss cut short: the lights are fitted from what it has.
+    if (bracket_)
+      if (const int failed = finishBracket(last_frame_number_); failed != 0) return failed;
     const double now_s = monotonicNowS();
     if (reconnect_.due(now_s)) {
       std::string error;
@@ -496,8 +501,9 @@ class Kiosk {
         }
         continue;
       }
-      const bool was_running = machine_.state() == AppState::kRunning;
-      machine_.onButtonPress();
+      // A bracket still being taken is part of the recalibration before it.
+      const bool was_running = machine_.state() == AppState::kRunning && !bracket_;
+      if (was_running) machine_.onButtonPress();
       // The lights are fitted from a map made now, not a smoothed old one.
       if (was_running) map_policy_.requestFreshMap();
       report_.count(was_running ? "button_presses_accepted" : "button_presses_ignored");
@@ -518,6 +524,8 @@ class Kiosk {
            << " but the camera calibration is " << camera.width_px << "x" << camera.height_px << "; frame skipped\n";
       return 0;
     }
+    // While an exposure bracket is taken, frames are its, not the picture's.
+    if (bracket_) return bracketFrame(frame, frame_number);
     std::string error;
     {
       StageTimer timer(report_, "upload");
@@ -591,7 +599,10 @@ class Kiosk {
     const bool maps_current = decision.update || decision.skip == MapSkipReason::kImageUnchanged;
     switch (machine_.onFrame(maps_current)) {
       case FrameOutcome::kFitLights:
-        if (const int failed = fitLights(frame_number, frame, track.found ? &view : nullptr); failed != 0) return failed;
+        // With a bracket to take, the fit waits for its frames.
+        if (track.found && startBracket(frame, frame_number, view, outline)) break;
+        if (const int failed = fitLights(frame_number, fitInputsOf(frame, track.found ? &view : nullptr)); failed != 0)
+          return failed;
         break;
       case FrameOutcome::kCalibrationFailed:
         report_.count("calibrations_failed");
@@ -707,9 +718,22 @@ class Kiosk {
 
   // A recalibration has seen enough good frames: fit the lights from the
   // current diffuse map.
-  // `frame` and `view` (null when the tag was not found in this frame): the
-  // frame the fit is made on, for the tag's white border.
-  int fitLights(std::uint64_t frame_number, const FrameBuffer& frame, const ibl::MirrorBallView* view) {
+  // What a fit has beyond the 8-bit maps: the fit frame's ball (null when
+  // the tag was not found in it) and pixels, for the white border and the
+  // clipped pixels; and an HDR map when a bracket was merged.
+  struct FitInputs {
+    const ibl::MirrorBallView* view = nullptr;
+    ibl::RgbPixelReader read;
+    std::optional<ibl::CubeMapRGB> hdr;
+  };
+  static FitInputs fitInputsOf(const FrameBuffer& frame, const ibl::MirrorBallView* view) {
+    FitInputs inputs;
+    inputs.view = view;
+    inputs.read = [&frame](int x, int y) { return frame.rgbAt(x, y); };
+    return inputs;
+  }
+
+  int fitLights(std::uint64_t frame_number, const FitInputs& inputs) {
     std::string error;
     std::vector<float> validity;
     const std::optional<ibl::CubeMapRGB> reflection = maps_.readReflection(error, &validity);
@@ -723,9 +747,23 @@ class Kiosk {
       const ibl::CubeMapRGB* fit_map = &*reflection;
       double clip_level = 1.0 / inputs_.rig.probe_reflectance;
       std::optional<ibl::CubeMapRGB> corrected;
-      if (config.white_reference && view) {
+      if (inputs.hdr && inputs.view) {
+        // A bracket measured the light: the clipped lights are what it holds
+        // beyond the 8-bit map where that clipped.
+        fit_map = &*inputs.hdr;
+        clip_level = std::numeric_limits<double>::infinity();
+        const ibl::HdrMergeSettings merge;
+        const std::vector<std::uint8_t> mask =
+            ibl::clippedTexelMask(*inputs.view, inputs.read, merge.clip_code, reflection->face_size);
+        clipped_lights = ibl::clippedLights(*inputs.hdr, *reflection, &validity, clipLevel(), &mask);
+        nlohmann::json lights = nlohmann::json::array();
+        for (const ibl::ClippedLight& l : clipped_lights)
+          lights.push_back({{"direction", {l.direction_w.x, l.direction_w.y, l.direction_w.z}},
+                            {"irradiance_rgb", {l.irradiance_rgb.r, l.irradiance_rgb.g, l.irradiance_rgb.b}}});
+        report_.extra["hdr"]["clipped_lights"] = lights;
+      } else if (config.white_reference && inputs.view) {
         corrected = *reflection;
-        if (whiteReference(frame, *view, validity, *corrected, clipped_lights)) {
+        if (whiteReference(inputs.read, *inputs.view, validity, *corrected, clipped_lights)) {
           fit_map = &*corrected;
           clip_level = std::numeric_limits<double>::infinity();  // nothing in it is clipped any more
         }
@@ -777,25 +815,177 @@ class Kiosk {
     return 0;
   }
 
+  // Texels at or above this clipped in the camera (the merge's clip code,
+  // through the ball's reflectance).
+  double clipLevel() const {
+    const ibl::HdrMergeSettings merge;
+    return ibl::decodeCameraValue(inputs_.settings.maps.stages.camera_transfer, merge.clip_code / 255.0) /
+           inputs_.rig.probe_reflectance;
+  }
+
+  // The frame as 8-bit R'G'B' (decoded from Y'CbCr where it is YUV).
+  static ImageRGB8 frameRgb(const FrameBuffer& frame) {
+    if (frame.layout == PixelLayout::kRgb8) return frame.rgb;
+    ImageRGB8 rgb;
+    rgb.resize(frame.width_px, frame.height_px);
+    for (int y = 0; y < frame.height_px; ++y)
+      for (int x = 0; x < frame.width_px; ++x) {
+        const glm::u8vec3 p = frame.rgbAt(x, y);
+        std::uint8_t* out = rgb.row(y) + 3 * x;
+        out[0] = p.r;
+        out[1] = p.g;
+        out[2] = p.b;
+      }
+    return rgb;
+  }
+
+  // lights.bracket_*: at a fit whose frame shows the ball clipped, shorter
+  // exposures are taken, bracket_step_stops apart, while the ball still
+  // clips and down to bracket_max_stops, and merged with the frame into an
+  // HDR map (app/bracket_merge.hpp). Bracket frames are not shown: the last
+  // frame stays, with a status line.
+  struct PendingBracket {
+    ImageRGB8 reference;
+    ibl::MirrorBallView view;
+    ibl::ProbeOutline outline;
+    FrameSource::ManualExposure base;  // the reference frame's exposure
+    double requested_ev = 0.0;
+    int frames_waited = 0;
+    std::vector<BracketCandidate> frames;
+    std::uint64_t started_frame = 0;
+    double started_s = 0.0;
+  };
+  // A requested exposure shows in a frame's metadata within a few frames
+  // (libcamera queues a handful of requests ahead, and sensors apply
+  // exposure changes two frames late); past this the bracket ends with what
+  // it has.
+  static constexpr int kBracketMaxWaitFrames = 8;
+  // A frame counts as the requested exposure within this many stops of it
+  // (sensors round exposure time to whole lines).
+  static constexpr double kBracketEvMatchStops = 0.25;
+
+  static FrameSource::ManualExposure exposureAt(const FrameSource::ManualExposure& base, double ev) {
+    return {base.exposure_us * std::exp2(ev), base.analogue_gain};
+  }
+
+  bool startBracket(const FrameBuffer& frame, std::uint64_t frame_number, const ibl::MirrorBallView& view,
+                    const ibl::ProbeOutline& outline) {
+    const LightsConfig& config = inputs_.settings.lights;
+    if (!(config.bracket_max_stops > 0.0) || !outline.valid) return false;
+    if (!(frame.metadata.exposure_us > 0.0)) {
+      report_.count("brackets_without_exposure_metadata");  // the EV of a frame could not be told
+      return false;
+    }
+    const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
+    PendingBracket bracket{frameRgb(frame), view, outline, {}, -config.bracket_step_stops, 0, {}, frame_number,
+                           monotonicNowS()};
+    if (ballPixelCodes(bracket.reference, outline, merge).clipped == 0) {
+      report_.count("brackets_not_needed");  // nothing clipped: the 8-bit map holds all the light
+      return false;
+    }
+    bracket.base = {frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0};
+    if (!source_->setManualExposure(exposureAt(bracket.base, bracket.requested_ev))) {
+      report_.count("brackets_unsupported");
+      return false;
+    }
+    report_.count("brackets_started");
+    bracket_ = std::move(bracket);
+    return true;
+  }
+
+  int bracketFrame(const FrameBuffer& frame, std::uint64_t frame_number) {
+    PendingBracket& bracket = *bracket_;
+    const LightsConfig& config = inputs_.settings.lights;
+    const double gain = frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0;
+    const double ev = frame.metadata.exposure_us > 0.0
+                          ? std::log2(frame.metadata.exposure_us * gain /
+                                      (bracket.base.exposure_us * bracket.base.analogue_gain))
+                          : std::numeric_limits<double>::quiet_NaN();
+    bool done = false;
+    if (std::isfinite(ev) && std::abs(ev - bracket.requested_ev) <= kBracketEvMatchStops) {
+      BracketCandidate candidate{"camera frame " + std::to_string(frame_number), ev, frameRgb(frame)};
+      const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
+      const bool still_clips = ballPixelCodes(candidate.rgb, bracket.outline, merge).clipped > 0;
+      bracket.frames.push_back(std::move(candidate));
+      bracket.frames_waited = 0;
+      report_.count("bracket_frames");
+      if (still_clips && bracket.requested_ev - config.bracket_step_stops >= -config.bracket_max_stops - 1e-9) {
+        bracket.requested_ev -= config.bracket_step_stops;
+        source_->setManualExposure(exposureAt(bracket.base, bracket.requested_ev));
+      } else {
+        done = true;
+      }
+    } else if (++bracket.frames_waited > kBracketMaxWaitFrames) {
+      report_.count("bracket_exposures_not_delivered");
+      log_ << logPrefix(LogPriority::kWarning) << "probelight: frame " << frame_number << ": the camera did not deliver EV "
+           << std::fixed << std::setprecision(1) << bracket.requested_ev << " in " << kBracketMaxWaitFrames
+           << " frames; the bracket ends with " << bracket.frames.size() << " frame(s)\n";
+      done = true;
+    }
+    std::ostringstream status;
+    status << "Recalibrating lights: exposure bracket, EV " << std::fixed << std::setprecision(0) << bracket.requested_ev;
+    if (const int failed = renderAndPresent(last_track_, status.str(), last_frame_number_, false); failed != 0)
+      return failed;
+    return done ? finishBracket(frame_number) : 0;
+  }
+
+  // Merges what the bracket took (nothing usable: the fit goes on with the
+  // white border) and fits the lights from it.
+  int finishBracket(std::uint64_t frame_number) {
+    PendingBracket bracket = std::move(*bracket_);
+    bracket_.reset();
+    source_->setManualExposure(std::nullopt);
+    const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
+    const BracketSetup setup{bracket.view, bracket.outline, inputs_.rig,
+                             tagDetectorSettings(inputs_.settings, inputs_.rig), merge,
+                             maps_.reflection().face_size};
+    BracketMergeResult merged;
+    {
+      StageTimer timer(report_, "bracket_merge");
+      merged = mergeBracketProbe(bracket.reference, std::move(bracket.frames), setup,
+                                 [&](const BracketCandidate& candidate, const std::string& why) {
+                                   log_ << logPrefix(LogPriority::kWarning) << "probelight: bracket: " << candidate.label
+                                        << " (EV " << std::fixed << std::setprecision(1) << candidate.ev
+                                        << ") left out: " << why << "\n";
+                                 });
+    }
+    report_.count(merged.hdr_cube ? "brackets_merged" : "brackets_unusable");
+    report_.extra["hdr"] = {{"method", merged.hdr_cube ? "bracket" : "none"},
+                            {"status", merged.status},
+                            {"frames", merged.frames},
+                            {"still_clipped_ball_px", merged.still_clipped_ball_px},
+                            {"camera_frames", frame_number - bracket.started_frame},
+                            // From the fit frame to the merged map: the camera's frames plus the merge.
+                            {"wall_ms", 1000.0 * (monotonicNowS() - bracket.started_s)}};
+    FitInputs inputs;
+    inputs.view = &bracket.view;
+    const ImageRGB8& reference = bracket.reference;
+    inputs.read = [&reference](int x, int y) {
+      const std::uint8_t* p = reference.row(y) + 3 * x;
+      return glm::u8vec3(p[0], p[1], p[2]);
+    };
+    inputs.hdr = std::move(merged.hdr_cube);
+    return fitLights(frame_number, inputs);
+  }
+
   // lights.white_reference: the tag's white border in the fit's frame says
   // the light on the ground; what the ball's 8-bit map falls short of it goes
   // to its clipped texels (in `corrected`), and from there into the clipped
   // lights the object is shaded with. False (the map stays as it was) when
   // the border cannot be used; the reason is in the report and, when the
   // ball did clip, in a warning.
-  bool whiteReference(const FrameBuffer& frame, const ibl::MirrorBallView& view, const std::vector<float>& validity,
-                      ibl::CubeMapRGB& corrected, std::vector<ibl::ClippedLight>& clipped_lights) {
+  bool whiteReference(const ibl::RgbPixelReader& read, const ibl::MirrorBallView& view,
+                      const std::vector<float>& validity, ibl::CubeMapRGB& corrected,
+                      std::vector<ibl::ClippedLight>& clipped_lights) {
     const AprilTagFamilyHandle family = createAprilTagFamily(inputs_.rig.tag_family);
     if (!family) return false;
     const ibl::WhiteRing ring =
         ibl::tagWhiteRing(family->width_at_border, family->reversed_border, inputs_.rig.tag_size_m);
     ibl::WhiteBorderSettings settings;
     settings.camera_transfer = inputs_.settings.maps.stages.camera_transfer;
-    const ibl::RgbPixelReader read = [&frame](int x, int y) { return frame.rgbAt(x, y); };
     const ibl::WhiteBorderReading reading = ibl::readWhiteBorder(view.camera, view.pose, ring, read, settings);
     const std::vector<std::uint8_t> mask = ibl::clippedTexelMask(view, read, settings.clip_code, corrected.face_size);
-    const double clip_level =
-        ibl::decodeCameraValue(settings.camera_transfer, settings.clip_code / 255.0) / inputs_.rig.probe_reflectance;
+    const double clip_level = clipLevel();
     const ibl::CubeMapRGB original = corrected;
     const ibl::WhiteReferenceResult result =
         ibl::correctClippedWithWhiteBorder(corrected, &validity, reading, inputs_.rig.tag_white_albedo, clip_level, &mask);
@@ -1124,6 +1314,7 @@ class Kiosk {
   SampleSeries exposure_us_, analogue_gain_;
   double last_exposure_us_ = 0.0, last_analogue_gain_ = 0.0;
   nlohmann::json exposure_at_last_fit_;  // null until a fit
+  std::optional<PendingBracket> bracket_;  // an exposure bracket being taken
 };
 
 }  // namespace

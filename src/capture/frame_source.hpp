@@ -147,6 +147,19 @@ class FrameSource {
     (void)locked;
     return false;
   }
+  // A fixed exposure (auto exposure off) for the frames that follow, as an
+  // exposure bracket needs; nullopt goes back to what lockExposure set.
+  // Frames already in flight keep their exposure: each frame's metadata
+  // (exposure_us, analogue_gain) says what it got, and a sensor may clamp
+  // the request. Returns false when the source has no such control.
+  struct ManualExposure {
+    double exposure_us = 0.0;
+    double analogue_gain = 1.0;
+  };
+  virtual bool setManualExposure(const std::optional<ManualExposure>& exposure) {
+    (void)exposure;
+    return false;
+  }
 };
 
 // Shared machinery for sources that make frames on a thread of their own:

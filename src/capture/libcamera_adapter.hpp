@@ -2,6 +2,9 @@
 // Raspberry Pi OS's 0.3-0.5, in one place (selected by libcamera/version.h).
 #pragma once
 
+#include <cmath>
+#include <cstdint>
+
 #include <memory>
 #include <optional>
 #include <vector>
@@ -45,6 +48,21 @@ inline void setExposureLocked(libcamera::ControlList& controls, bool locked) {
   controls.set(libcamera::controls::AeEnable, !locked);
 #endif
   controls.set(libcamera::controls::AwbEnable, !locked);
+}
+
+// A fixed exposure time (microseconds) and analogue gain, AE off (0.5's
+// manual modes, AeEnable false before it). The sensor may clamp them; the
+// frame's metadata says what it used.
+inline void setManualExposure(libcamera::ControlList& controls, double exposure_us, double analogue_gain) {
+#if LIBCAMERA_VERSION_MAJOR > 0 || LIBCAMERA_VERSION_MINOR >= 5
+  controls.set(libcamera::controls::ExposureTimeMode, libcamera::controls::ExposureTimeModeManual);
+  controls.set(libcamera::controls::AnalogueGainMode, libcamera::controls::AnalogueGainModeManual);
+#else
+  controls.set(libcamera::controls::AeEnable, false);
+#endif
+  controls.set(libcamera::controls::ExposureTime, static_cast<std::int32_t>(std::lround(exposure_us)));
+  controls.set(libcamera::controls::AnalogueGain, static_cast<float>(analogue_gain));
+  controls.set(libcamera::controls::AwbEnable, false);
 }
 
 // The Y'CbCr encoding of a validated stream. No colour space (old pipeline

@@ -92,7 +92,6 @@ bool LibcameraSource::start(std::string& error) {
     error_.clear();
   }
   ++generation_;
-  exposure_controls_sent_ = false;
   if (!startCamera(error)) {
     shutDown();
     return false;
@@ -221,11 +220,12 @@ bool LibcameraSource::startCamera(std::string& error) {
     return false;
   }
   started_ = true;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    exposure_.pipelineRestarted();
+  }
   for (const std::unique_ptr<Slot>& slot : slots_) {
-    if (exposure_locked_ != exposure_locked_applied_ || exposure_locked_) {
-      libcamera_adapter::setExposureLocked(slot->request->controls(), exposure_locked_);
-      exposure_locked_applied_ = exposure_locked_;
-    }
+    addExposureControls(slot->request.get());
     if (camera_->queueRequest(slot->request.get()) != 0) {
       error = "camera: cannot queue a capture request";
       return false;
@@ -252,25 +252,45 @@ LibcameraSource::Slot* LibcameraSource::slotOf(libcamera::Request* request) {
 
 bool LibcameraSource::lockExposure(bool locked) {
   std::lock_guard<std::mutex> lock(mutex_);
-  exposure_locked_ = locked;
+  exposure_.setLocked(locked);
   return true;
+}
+
+bool LibcameraSource::setManualExposure(const std::optional<ManualExposure>& exposure) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (exposure)
+    exposure_.setManual(ExposureSetting{exposure->exposure_us, exposure->analogue_gain});
+  else
+    exposure_.setManual(std::nullopt);
+  return true;
+}
+
+// The controls the exposure sequencer says this request must carry.
+void LibcameraSource::addExposureControls(libcamera::Request* request) {
+  ExposureControls controls;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    controls = exposure_.nextRequest();
+  }
+  switch (controls.kind) {
+    case ExposureControls::Kind::kNone: break;
+    case ExposureControls::Kind::kAuto: libcamera_adapter::setExposureLocked(request->controls(), false); break;
+    case ExposureControls::Kind::kLocked: libcamera_adapter::setExposureLocked(request->controls(), true); break;
+    case ExposureControls::Kind::kManual:
+      libcamera_adapter::setManualExposure(request->controls(), controls.setting.exposure_us,
+                                           controls.setting.analogue_gain);
+      break;
+  }
 }
 
 void LibcameraSource::requeue(libcamera::Request* request) {
   if (!camera_ || !started_) return;
   request->reuse(libcamera::Request::ReuseBuffers);
-  bool locked = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (stopping_ || disconnected_) return;
-    locked = exposure_locked_;
   }
-  // Controls persist in the pipeline once set: send them on a change only.
-  if (locked != exposure_locked_applied_ || !exposure_controls_sent_) {
-    libcamera_adapter::setExposureLocked(request->controls(), locked);
-    exposure_locked_applied_ = locked;
-    exposure_controls_sent_ = true;
-  }
+  addExposureControls(request);
   if (camera_->queueRequest(request) != 0) {
     std::lock_guard<std::mutex> lock(mutex_);
     error_ = "camera: cannot re-queue a capture request";
@@ -317,6 +337,10 @@ FrameWait LibcameraSource::waitFrame(std::chrono::milliseconds timeout, FrameLea
   if (auto timestamp = metadata.get(libcamera::controls::SensorTimestamp)) frame.metadata.timestamp_ns = *timestamp;
   if (auto exposure = metadata.get(libcamera::controls::ExposureTime)) frame.metadata.exposure_us = *exposure;
   if (auto gain = metadata.get(libcamera::controls::AnalogueGain)) frame.metadata.analogue_gain = *gain;
+  if (frame.metadata.exposure_us > 0.0) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    exposure_.onFrame({frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0});
+  }
   frame.metadata.origin = "camera:" + std::to_string(frame.metadata.sequence);
   lease = FrameLease(&frame, [this, request](FrameBuffer*) { requeue(request); });
   return FrameWait::kFrame;

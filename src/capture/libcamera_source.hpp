@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "capture/exposure_sequencer.hpp"
 #include "capture/frame_source.hpp"
 
 namespace libcamera {
@@ -60,6 +61,9 @@ class LibcameraSource final : public FrameSource {
   std::string lastError() const override;
   std::string name() const override;
   bool lockExposure(bool locked) override;
+  // ExposureTime and AnalogueGain with AE off (a bracket frame); nullopt
+  // goes back to the lock state. Sent with the next re-queued request.
+  bool setManualExposure(const std::optional<ManualExposure>& exposure) override;
   // The stream's colour encoding as the camera agreed it.
   YcbcrEncoding encoding() const { return encoding_; }
 
@@ -69,6 +73,7 @@ class LibcameraSource final : public FrameSource {
   void requestCompleted(libcamera::Request* request);
   // Re-queues a request, with the exposure controls it needs.
   void requeue(libcamera::Request* request);
+  void addExposureControls(libcamera::Request* request);
   Slot* slotOf(libcamera::Request* request);
   void shutDown();
 
@@ -93,10 +98,8 @@ class LibcameraSource final : public FrameSource {
   bool disconnected_ = false;
   bool stopping_ = false;
   std::string error_;
-  // Exposure lock wanted, and what the last queued request asked for.
-  bool exposure_locked_ = false;
-  bool exposure_locked_applied_ = false;
-  bool exposure_controls_sent_ = false;
+  // Exposure lock, bracket values, and what the pipeline already has.
+  ExposureSequencer exposure_;
 };
 
 // Why no camera was found, with the usual causes: one line.

@@ -1,5 +1,6 @@
 #include "capture/sim_frame_source.hpp"
 
+#include <cmath>
 #include <exception>
 
 #include "sim/camera_ycbcr.hpp"
@@ -31,6 +32,12 @@ bool SimFrameSource::lockExposure(bool locked) {
   return true;
 }
 
+bool SimFrameSource::setManualExposure(const std::optional<ManualExposure>& exposure) {
+  std::lock_guard<std::mutex> lock(exposure_mutex_);
+  manual_exposure_ = exposure;
+  return true;
+}
+
 bool SimFrameSource::prepare(std::string& error) {
   if (lost_ && !came_back_) {
     if (restarts_failed_ < options_.failed_restarts) {
@@ -57,13 +64,21 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
     error = "camera: sim camera disconnected";
     return Produced::kError;
   }
+  // The sensor's own exposure: 10 ms at gain 1 (the scene's exposure).
+  constexpr double kSimExposureUs = 10000.0;
+  ManualExposure exposure{kSimExposureUs, 1.0};
+  {
+    std::lock_guard<std::mutex> lock(exposure_mutex_);
+    if (manual_exposure_) exposure = *manual_exposure_;
+  }
+  const double exposure_ev = std::log2(exposure.exposure_us * exposure.analogue_gain / kSimExposureUs);
   try {
     FrameTruth truth;
     if (isYuv(options_.layout)) {
-      world_->render(index, rendered_, truth);
+      world_->render(index, rendered_, truth, exposure_ev);
       encodeSimFrame(rendered_, options_.layout, buffer);
     } else {
-      world_->render(index, buffer.rgb, truth);
+      world_->render(index, buffer.rgb, truth, exposure_ev);
       buffer.finishRgb();
     }
     buffer.metadata = FrameMetadata{};
@@ -71,8 +86,8 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
     // Exact 30 fps without drift: index * 1e9 / 30, rounded down.
     buffer.metadata.timestamp_ns = static_cast<std::int64_t>(index * 1'000'000'000ull / 30u);
     buffer.metadata.origin = "sim:" + std::to_string(index);
-    buffer.metadata.exposure_us = 10000.0;
-    buffer.metadata.analogue_gain = 1.0;
+    buffer.metadata.exposure_us = exposure.exposure_us;
+    buffer.metadata.analogue_gain = exposure.analogue_gain;
     buffer.metadata.truth = truth;
   } catch (const std::exception& e) {
     error = "sim frame " + std::to_string(index) + ": " + e.what();

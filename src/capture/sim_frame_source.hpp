@@ -3,6 +3,8 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 
 #include "capture/frame_source.hpp"
@@ -38,6 +40,10 @@ class SimFrameSource : public ThreadedFrameSource {
   // The simulated camera has a fixed exposure (10 ms, gain 1, in every
   // frame's metadata): locking it changes nothing, and succeeds.
   bool lockExposure(bool locked) override;
+  // The simulated sensor takes any exposure: frames are rendered
+  // log2(exposure_us * gain / 10 ms) stops from the scene's exposure
+  // (sim::World::render's exposure_ev), and say so in their metadata.
+  bool setManualExposure(const std::optional<ManualExposure>& exposure) override;
 
  protected:
   bool prepare(std::string& error) override;
@@ -51,6 +57,8 @@ class SimFrameSource : public ThreadedFrameSource {
   bool came_back_ = false;  // ... and a restart brought it back
   int restarts_failed_ = 0;
   ImageRGB8 rendered_;      // YUV layouts: the picture before encoding
+  std::mutex exposure_mutex_;  // set on the render thread, read on the producer's
+  std::optional<ManualExposure> manual_exposure_;
 };
 
 }  // namespace probelight

@@ -81,7 +81,9 @@ TEST(LightDomeAccuracy, EightLightsHoldTheUpperIrradianceOfEveryWorld) {
       // (The cube's own 1.4 degree texels account for up to ~3.6% straight
       // up in the Stage world's small bright lamps; the rest is the regions
       // that straddle a normal's horizon.)
-      if (placement == ibl::LightDomeSettings{}.placement) EXPECT_LT(worst, 0.10) << name;
+      if (placement == ibl::LightDomeSettings{}.placement) {
+        EXPECT_LT(worst, 0.10) << name;
+      }
     }
   }
 }

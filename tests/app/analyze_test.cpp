@@ -210,8 +210,13 @@ TEST_P(AnalyzeSim, SeesWhatTheSimulatorRendered) {
   double error_sum = 0.0;
   double error_max = 0.0;
   std::ostringstream detail;
+  // The 8-bit diffuse map's own irradiance against what the 8-bit ball can
+  // show (the clipped truth); where the white border restored clipped light,
+  // `irradiance` is that and the 8-bit figure is kept as irradiance_8bit.
+  const nlohmann::json& irradiance_8bit =
+      analysis.contains("irradiance_8bit") ? analysis["irradiance_8bit"] : analysis["irradiance"];
   for (size_t i = 0; i < normals.size(); ++i) {
-    const auto& entry = analysis["irradiance"][i];
+    const auto& entry = irradiance_8bit[i];
     const glm::dvec3 normal = jsonVec3(entry["normal"]);
     EXPECT_NEAR(glm::length(normal - normals[i]), 0.0, 1e-9) << i;
     const double estimated = luminance(jsonVec3(entry["rgb"]));
@@ -538,9 +543,27 @@ TEST_F(AnalyzeBracket, MergedBracketMatchesTheHdrTruthAndBadFramesAreLeftOut) {
     std::fill(black.pixels.begin(), black.pixels.end(), 0);
     return black;
   }());
+  // All white (the ball clipped everywhere), a file that is not an image,
+  // and a shorter exposure from another camera position (the orbit's 20th
+  // frame: the ball has moved many pixels).
+  writeRgb("white.png", [&] {
+    ImageRGB8 white = frame;
+    std::fill(white.pixels.begin(), white.pixels.end(), 255);
+    return white;
+  }());
+  std::ofstream(dir_ / "notes.png") << "not a picture\n";
+  {
+    ImageRGB8 moved;
+    FrameTruth ignored;
+    world.render(20, moved, ignored, -3.0);
+    writeRgb("moved.png", moved);
+  }
   args += " --bracket " + (dir_ / "nowhere.png").string() + "@-4";
   args += " --bracket " + (dir_ / "under3.png").string() + "@-5";
   args += " --bracket " + (dir_ / "black.png").string() + "@-15";
+  args += " --bracket " + (dir_ / "white.png").string() + "@-1";
+  args += " --bracket " + (dir_ / "notes.png").string() + "@-2";
+  args += " --bracket " + (dir_ / "moved.png").string() + "@-3";
   const CommandResult result = run(args);
   ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
   const nlohmann::json analysis = readAnalysis();
@@ -555,7 +578,7 @@ TEST_F(AnalyzeBracket, MergedBracketMatchesTheHdrTruthAndBadFramesAreLeftOut) {
         EXPECT_NEAR(f["measured_ev"].get<double>(), f["ev"].get<double>(), 0.5);
       }
     } else {
-      reasons[fs::path(f["path"].get<std::string>()).filename().string() + "@" +
+      reasons[fs::path(f["frame"].get<std::string>()).filename().string() + "@" +
               std::to_string(f["ev"].get<int>())] = f["reason"].get<std::string>();
     }
   }
@@ -563,8 +586,11 @@ TEST_F(AnalyzeBracket, MergedBracketMatchesTheHdrTruthAndBadFramesAreLeftOut) {
   EXPECT_NE(reasons["nowhere.png@-4"].find("no such file"), std::string::npos);
   EXPECT_NE(reasons["under3.png@-5"].find("its pixels say EV -3"), std::string::npos) << reasons["under3.png@-5"];
   EXPECT_NE(reasons["black.png@-15"].find("black"), std::string::npos);
+  EXPECT_NE(reasons["white.png@-1"].find("clipped everywhere"), std::string::npos) << reasons["white.png@-1"];
+  EXPECT_NE(reasons["notes.png@-2"].find("not a readable image"), std::string::npos) << reasons["notes.png@-2"];
+  EXPECT_NE(reasons["moved.png@-3"].find("the camera moved"), std::string::npos) << reasons["moved.png@-3"];
   // One warning line per frame left out.
-  EXPECT_EQ(testing::countOccurrences(result.stderr_text, "left out:"), 3u) << result.stderr_text;
+  EXPECT_EQ(testing::countOccurrences(result.stderr_text, "left out:"), 6u) << result.stderr_text;
   EXPECT_EQ(analysis["hdr"]["still_clipped_ball_px"], 0);
 
   double hdr_error = 0.0, ldr_error = 0.0;

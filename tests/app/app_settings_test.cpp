@@ -65,6 +65,8 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.lights.refit_when_light_changes, defaults.lights.refit_when_light_changes);
   EXPECT_DOUBLE_EQ(from_file.lights.refit_change_fraction, defaults.lights.refit_change_fraction);
   EXPECT_EQ(from_file.lights.white_reference, defaults.lights.white_reference);
+  EXPECT_DOUBLE_EQ(from_file.lights.bracket_step_stops, defaults.lights.bracket_step_stops);
+  EXPECT_DOUBLE_EQ(from_file.lights.bracket_max_stops, defaults.lights.bracket_max_stops);
   EXPECT_EQ(from_file.button.gpio.chip, defaults.button.gpio.chip);
   EXPECT_EQ(from_file.button.gpio.line, defaults.button.gpio.line);
   EXPECT_DOUBLE_EQ(from_file.button.gpio.debounce.debounce_ms, defaults.button.gpio.debounce.debounce_ms);

@@ -66,7 +66,9 @@ TEST(HdrBracket, MergedRadianceFollowsTheRampWhereverSomeFrameMeasuredIt) {
       // spacing guarantees one from 0.052 up to 0.955 * 2^9), the bound
       // is the 1.4% of a half step at code 64 unless a darker frame
       // joined in; the result stays within 2%.
-      if (truth >= 0.052 && truth <= 0.955 * 512.0) EXPECT_NEAR(got / truth, 1.0, 0.02) << truth;
+      if (truth >= 0.052 && truth <= 0.955 * 512.0) {
+        EXPECT_NEAR(got / truth, 1.0, 0.02) << truth;
+      }
       ++measured;
     }
     // Beyond what even EV -9 measures: a lower bound, flagged.

@@ -135,8 +135,9 @@ TEST(LightDome, ReproducesTheUpperHemisphereIrradianceWithinTenPercent) {
         }
         std::printf("[ dome     ] %-10s %-10s %2d lights: irradiance at %zu normals (z >= 0.5) mean %.2f%%, worst %.2f%%\n",
                     world.name, toString(placement), count, normals.size(), 100.0 * sum / normals.size(), 100.0 * worst);
-        if (placement == LightDomeSettings{}.placement && count >= world.lights_needed)
+        if (placement == LightDomeSettings{}.placement && count >= world.lights_needed) {
           EXPECT_LT(worst, 0.10) << world.name << " " << count;
+        }
       }
     }
   }

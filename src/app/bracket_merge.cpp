@@ -1,0 +1,130 @@
+#include "app/bracket_merge.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "ibl/probe_to_cube.hpp"
+#include "tracking/tag_tracker.hpp"
+
+namespace probelight {
+namespace {
+
+std::string fixed(double value, int digits) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(digits);
+  out << value;
+  return out.str();
+}
+
+template <typename Visit>
+void forEachBallPixel(const ibl::ProbeOutline& outline, int width, int height, Visit visit) {
+  const int x0 = std::max(0, static_cast<int>(std::floor(outline.min_px.x)));
+  const int x1 = std::min(width - 1, static_cast<int>(std::ceil(outline.max_px.x)));
+  const int y0 = std::max(0, static_cast<int>(std::floor(outline.min_px.y)));
+  const int y1 = std::min(height - 1, static_cast<int>(std::ceil(outline.max_px.y)));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x)
+      if (glm::length(glm::dvec2(x, y) - outline.center_px) <= outline.radius_px) visit(x, y);
+}
+
+}  // namespace
+
+BallPixelCodes ballPixelCodes(const ImageRGB8& image, const ibl::ProbeOutline& outline,
+                              const ibl::HdrMergeSettings& merge) {
+  BallPixelCodes codes;
+  forEachBallPixel(outline, image.width, image.height, [&](int x, int y) {
+    const std::uint8_t* p = image.row(y) + 3 * x;
+    const int high = std::max({p[0], p[1], p[2]}), low = std::min({p[0], p[1], p[2]});
+    if (high >= merge.clip_code) ++codes.clipped;
+    if (low > merge.dark_code && high < merge.clip_code) ++codes.measured;
+  });
+  return codes;
+}
+
+BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<BracketCandidate> candidates,
+                                     const BracketSetup& setup,
+                                     const std::function<void(const BracketCandidate&, const std::string&)>& refused) {
+  BracketMergeResult result;
+  auto refuse = [&](const BracketCandidate& candidate, const std::string& why) {
+    result.frames.push_back({{"frame", candidate.label}, {"ev", candidate.ev}, {"used", false}, {"reason", why}});
+    if (refused) refused(candidate, why);
+  };
+  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.ev > b.ev; });
+  std::vector<const BracketCandidate*> accepted;
+  const ImageRGB8* previous = &reference;
+  double previous_ev = 0.0;
+  for (const BracketCandidate& candidate : candidates) {
+    if (candidate.rgb.width != reference.width || candidate.rgb.height != reference.height) {
+      refuse(candidate, "it is " + std::to_string(candidate.rgb.width) + "x" + std::to_string(candidate.rgb.height) +
+                            ", the reference frame " + std::to_string(reference.width) + "x" +
+                            std::to_string(reference.height));
+      continue;
+    }
+    const BallPixelCodes codes = ballPixelCodes(candidate.rgb, setup.outline, setup.merge);
+    if (codes.measured == 0) {
+      refuse(candidate, codes.clipped > 0 ? "the ball is clipped everywhere in it" : "the ball is black everywhere in it");
+      continue;
+    }
+    // The camera must not have moved: where the tag is bright enough to be
+    // found, the ball must be where the reference frame has it.
+    std::vector<std::uint8_t> luma;
+    lumaFromRgb(candidate.rgb, luma);
+    tracking::TagTracker tracker(setup.detector, setup.rig, setup.view.camera);
+    const tracking::TagTrackResult track =
+        tracker.track(luma.data(), candidate.rgb.width, candidate.rgb.height, candidate.rgb.width);
+    std::string pose_check = "tag too dark to find: pose not checked";
+    if (track.found) {
+      const ibl::ProbeOutline there = ibl::computeProbeOutline(
+          ibl::MirrorBallView{setup.view.camera, track.pose, setup.view.center_w, setup.view.radius_m});
+      const double moved_px = glm::length(there.center_px - setup.outline.center_px);
+      if (moved_px > kBracketMaxBallShiftPx) {
+        refuse(candidate, "the camera moved: the ball is " + fixed(moved_px, 2) + " px from where the reference frame has it");
+        continue;
+      }
+      pose_check = "ball within " + fixed(moved_px, 2) + " px of the reference frame's";
+    }
+    // The exposure the pixels show against the one claimed.
+    const std::optional<double> ratio = ibl::measureExposureRatio(*previous, candidate.rgb, setup.merge);
+    nlohmann::json entry = {{"frame", candidate.label}, {"ev", candidate.ev}, {"used", true}, {"pose", pose_check}};
+    if (ratio) {
+      const double measured_ev = previous_ev + std::log2(*ratio);
+      entry["measured_ev"] = measured_ev;
+      if (std::abs(measured_ev - candidate.ev) > kBracketMaxEvDisagreement) {
+        refuse(candidate, "its pixels say EV " + fixed(measured_ev, 1) + ", not " + fixed(candidate.ev, 1));
+        continue;
+      }
+    } else {
+      entry["measured_ev"] = nullptr;  // nothing well exposed in both frames: not checked
+    }
+    result.frames.push_back(entry);
+    accepted.push_back(&candidate);
+    previous = &candidate.rgb;
+    previous_ev = candidate.ev;
+  }
+  result.used = static_cast<int>(accepted.size());
+  if (accepted.empty()) {
+    result.status = "no usable bracket frame";
+    return result;
+  }
+  std::vector<ibl::BracketFrame> frames{{&reference, 0.0}};
+  for (const BracketCandidate* candidate : accepted) frames.push_back({&candidate->rgb, candidate->ev});
+  const ibl::HdrMergeResult merged = ibl::mergeBracket(frames, setup.merge);
+  ibl::ProbeToCubeParams params;
+  params.face_size = setup.face_size;
+  params.probe_reflectance = setup.rig.probe_reflectance;
+  params.camera_transfer = setup.merge.camera_transfer;
+  params.samples_per_axis = 4;
+  result.hdr_cube = ibl::probeRadianceToCubeMap(setup.view, merged.linear, params);
+  forEachBallPixel(setup.outline, reference.width, reference.height, [&](int x, int y) {
+    result.still_clipped_ball_px += merged.still_clipped[static_cast<std::size_t>(y) * reference.width + x];
+  });
+  result.status = result.still_clipped_ball_px > 0
+                      ? "merged; " + std::to_string(result.still_clipped_ball_px) +
+                            " ball pixels clipped even in the shortest exposure (a lower bound there)"
+                      : "merged";
+  return result;
+}
+
+}  // namespace probelight
