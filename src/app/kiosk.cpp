@@ -233,7 +233,10 @@ class Kiosk {
     if (const int status = setUp(); status != 0) return status;
     installShutdownHandlers();
     const auto loop_start = std::chrono::steady_clock::now();
-    const int status = frameLoop();
+    int status = frameLoop();
+    // A bracket the run's end cut short (its frame limit, its stream, a
+    // signal): the lights are fitted from what it has, and kept.
+    if (status == 0 && bracket_) status = finishBracket(last_frame_number_);
     notifier_.stopping();
     const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
     source_->stop();
@@ -423,6 +426,7 @@ class Kiosk {
     source_->stop();
     exposure_locked_ = false;  // a new stream starts with AE running
     if (bracket_) report_.count("brackets_cut_by_camera_loss");  // whileCameraLost finishes it
+    settling_.reset();  // a new stream starts at its own exposure
     reconnect_.onLost(monotonicNowS());
   }
 
@@ -524,8 +528,11 @@ class Kiosk {
            << " but the camera calibration is " << camera.width_px << "x" << camera.height_px << "; frame skipped\n";
       return 0;
     }
-    // While an exposure bracket is taken, frames are its, not the picture's.
+    // While an exposure bracket is taken, frames are its, not the picture's;
+    // after it, frames still in flight at its exposures are not shown either.
     if (bracket_) return bracketFrame(frame, frame_number);
+    if (settling_ && !exposureSettled(frame))
+      return showKeptFrame(frame_number, "Recalibrating lights: exposure returning");
     std::string error;
     {
       StageTimer timer(report_, "upload");
@@ -587,6 +594,7 @@ class Kiosk {
       status = "Mirror ball image all black (covered?): lighting kept";
     if (decision.update) {
       if (const int failed = updateMaps(view, rig.probe_reflectance, decision.new_weight); failed != 0) return failed;
+      if (const int failed = rescaleClippedLights(frame_number); failed != 0) return failed;
       maps_view_ = view;
       if (const int failed = checkLightChange(frame_number); failed != 0) return failed;
     } else {
@@ -718,18 +726,71 @@ class Kiosk {
 
   // A recalibration has seen enough good frames: fit the lights from the
   // current diffuse map.
+  // The object's clipped lights, each at `scale` of what was measured.
+  void setClippedLights(const std::vector<double>& scale) {
+    lighting_.clipped_direction_w = {};
+    lighting_.clipped_diffuse_rgb = {};
+    for (std::size_t k = 0; k < clipped_lights_.size() && k < lighting_.clipped_direction_w.size(); ++k) {
+      lighting_.clipped_direction_w[k] = glm::vec3(clipped_lights_[k].direction_w);
+      lighting_.clipped_diffuse_rgb[k] =
+          glm::vec3(scale[k] * clipped_lights_[k].irradiance_rgb / 3.14159265358979323846);
+    }
+  }
+
+  // Exposure time times gain of the newest frame (1 when the source cannot
+  // say): camera-linear values scale with it.
+  static double exposureProductOf(double exposure_us, double analogue_gain) {
+    return exposure_us > 0.0 ? exposure_us * (analogue_gain > 0.0 ? analogue_gain : 1.0) : 1.0;
+  }
+  double exposureProduct() const { return exposureProductOf(last_exposure_us_, last_analogue_gain_); }
+
+  // After each map update: the frame-rate maps are 8-bit, and the clipped
+  // lights carry what they clip. Each light is scaled by the share of its
+  // texels that still clip now over the share that did at the fit (a sun
+  // gone behind a cloud, a lamp switched off: 0), and by the exposure now
+  // over the exposure then (AE runs again after a fit, and the maps are in
+  // the camera's linear units). One read-back of the reflection map per
+  // map update, none when there are no clipped lights.
+  int rescaleClippedLights(std::uint64_t frame_number) {
+    if (clipped_lights_.empty()) return 0;
+    std::vector<double> scale(clipped_lights_.size(), 1.0);
+    {
+      StageTimer timer(report_, "clipped_rescale");
+      std::string error;
+      const std::optional<ibl::CubeMapRGB> live = maps_.readReflection(error);
+      if (!live) return fail(1, error);
+      const double exposure_ratio = exposureProduct() / clipped_exposure_at_fit_;
+      for (std::size_t k = 0; k < clipped_lights_.size(); ++k) {
+        const double at_fit = clipped_share_at_fit_[k];
+        const double share = at_fit > 0.0 ? std::min(1.0, ibl::stillClippedShare(clipped_lights_[k], *live, clipLevel()) / at_fit)
+                                          : 1.0;  // nothing of it clipped in the map: it cannot be followed
+        scale[k] = share * exposure_ratio;
+      }
+    }
+    setClippedLights(scale);
+    report_.count("clipped_rescales");
+    report_.extra["clipped_lights_now"] = {{"frame", frame_number}, {"scale", scale}};
+    return 0;
+  }
+
   // What a fit has beyond the 8-bit maps: the fit frame's ball (null when
   // the tag was not found in it) and pixels, for the white border and the
   // clipped pixels; and an HDR map when a bracket was merged.
+  // `exposure`: the 8-bit map's frame's (0: the source cannot say), the
+  // unit of the camera-linear values.
   struct FitInputs {
     const ibl::MirrorBallView* view = nullptr;
     ibl::RgbPixelReader read;
     std::optional<ibl::CubeMapRGB> hdr;
+    FrameSource::ManualExposure exposure{0.0, 0.0};
+    bool exposure_locked = false;
   };
-  static FitInputs fitInputsOf(const FrameBuffer& frame, const ibl::MirrorBallView* view) {
+  FitInputs fitInputsOf(const FrameBuffer& frame, const ibl::MirrorBallView* view) const {
     FitInputs inputs;
     inputs.view = view;
     inputs.read = [&frame](int x, int y) { return frame.rgbAt(x, y); };
+    inputs.exposure = {frame.metadata.exposure_us, frame.metadata.analogue_gain};
+    inputs.exposure_locked = exposure_locked_;
     return inputs;
   }
 
@@ -771,12 +832,15 @@ class Kiosk {
       dome = ibl::fitLightDome(*fit_map, &validity, config.dome);
       light = ibl::findDominantLight(*fit_map, &validity, dome, clip_level, config.dome);
     }
-    lighting_.clipped_direction_w = {};
-    lighting_.clipped_diffuse_rgb = {};
-    for (std::size_t k = 0; k < clipped_lights.size() && k < lighting_.clipped_direction_w.size(); ++k) {
-      lighting_.clipped_direction_w[k] = glm::vec3(clipped_lights[k].direction_w);
-      lighting_.clipped_diffuse_rgb[k] = glm::vec3(clipped_lights[k].irradiance_rgb / 3.14159265358979323846);
-    }
+    // The clipped lights follow the frame-rate maps from now on
+    // (rescaleClippedLights): how much of each still clips in them, against
+    // how much did in the map they were found beside.
+    clipped_lights_ = std::move(clipped_lights);
+    clipped_share_at_fit_.clear();
+    for (const ibl::ClippedLight& light : clipped_lights_)
+      clipped_share_at_fit_.push_back(ibl::stillClippedShare(light, *reflection, clipLevel()));
+    clipped_exposure_at_fit_ = exposureProductOf(inputs.exposure.exposure_us, inputs.exposure.analogue_gain);
+    setClippedLights(std::vector<double>(clipped_lights_.size(), 1.0));
     light_transition_.retarget(dome, frame_time_s_);
     // What checkLightChange compares with later: the same estimate, from the
     // same map.
@@ -786,8 +850,10 @@ class Kiosk {
     lighting_.highlight_rgb = glm::vec3(light.rgb);
     report_.count("calibrations_completed");
     // The ball's brightness in the fit follows these (0: the source cannot say).
-    exposure_at_last_fit_ = {{"frame", frame_number}, {"exposure_us", last_exposure_us_},
-                             {"analogue_gain", last_analogue_gain_}, {"locked", exposure_locked_}};
+    exposure_at_last_fit_ = {{"frame", frame_number},
+                             {"exposure_us", inputs.exposure.exposure_us},
+                             {"analogue_gain", inputs.exposure.analogue_gain},
+                             {"locked", inputs.exposure_locked}};
     if (!inputs_.settings.state.dir.empty()) {
       // Kept for the next start; a failed write leaves the old file whole.
       std::string save_error;
@@ -849,6 +915,7 @@ class Kiosk {
     ibl::MirrorBallView view;
     ibl::ProbeOutline outline;
     FrameSource::ManualExposure base;  // the reference frame's exposure
+    bool exposure_locked = false;      // ... and whether AE was locked for it
     double requested_ev = 0.0;
     int frames_waited = 0;
     std::vector<BracketCandidate> frames;
@@ -877,8 +944,8 @@ class Kiosk {
       return false;
     }
     const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
-    PendingBracket bracket{frameRgb(frame), view, outline, {}, -config.bracket_step_stops, 0, {}, frame_number,
-                           monotonicNowS()};
+    PendingBracket bracket{frameRgb(frame), view, outline, {}, exposure_locked_, -config.bracket_step_stops, 0, {},
+                           frame_number, monotonicNowS()};
     if (ballPixelCodes(bracket.reference, outline, merge).clipped == 0) {
       report_.count("brackets_not_needed");  // nothing clipped: the 8-bit map holds all the light
       return false;
@@ -893,14 +960,40 @@ class Kiosk {
     return true;
   }
 
+  // A frame of (or just after) a bracket: not shown; the last frame stays,
+  // with `status`. Every frame is accounted for in every stage: these skip
+  // them all.
+  int showKeptFrame(std::uint64_t frame_number, const std::string& status) {
+    report_.count("frames_in_bracket");
+    for (const char* stage : {"upload", "detect_pose", "probe_to_cube"}) report_.recordStageSkip(stage, "exposure_bracket");
+    report_.recordStageSkip(diffuseStageName(), "exposure_bracket");
+    ++map_skip_reasons_["exposure_bracket"];
+    tag_status_frames_["exposure_bracket"] += 1;  // not looked for
+    return renderAndPresent(last_track_, status, frame_number, false);
+  }
+
+  // Stops of a frame's exposure from `base` (NaN when it does not say).
+  static double stopsFrom(const FrameBuffer& frame, const FrameSource::ManualExposure& base) {
+    if (!(frame.metadata.exposure_us > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+    const double gain = frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0;
+    return std::log2(frame.metadata.exposure_us * gain / (base.exposure_us * base.analogue_gain));
+  }
+
+  // After a bracket: true once a frame is back at the exposure from before
+  // it (or after kBracketMaxWaitFrames, when the camera's AE has moved on).
+  bool exposureSettled(const FrameBuffer& frame) {
+    const double ev = stopsFrom(frame, settling_->base);
+    if (!std::isfinite(ev) || std::abs(ev) <= kBracketEvMatchStops || ++settling_->frames_waited > kBracketMaxWaitFrames) {
+      settling_.reset();
+      return true;
+    }
+    return false;
+  }
+
   int bracketFrame(const FrameBuffer& frame, std::uint64_t frame_number) {
     PendingBracket& bracket = *bracket_;
     const LightsConfig& config = inputs_.settings.lights;
-    const double gain = frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0;
-    const double ev = frame.metadata.exposure_us > 0.0
-                          ? std::log2(frame.metadata.exposure_us * gain /
-                                      (bracket.base.exposure_us * bracket.base.analogue_gain))
-                          : std::numeric_limits<double>::quiet_NaN();
+    const double ev = stopsFrom(frame, bracket.base);
     bool done = false;
     if (std::isfinite(ev) && std::abs(ev - bracket.requested_ev) <= kBracketEvMatchStops) {
       BracketCandidate candidate{"camera frame " + std::to_string(frame_number), ev, frameRgb(frame)};
@@ -924,8 +1017,7 @@ class Kiosk {
     }
     std::ostringstream status;
     status << "Recalibrating lights: exposure bracket, EV " << std::fixed << std::setprecision(0) << bracket.requested_ev;
-    if (const int failed = renderAndPresent(last_track_, status.str(), last_frame_number_, false); failed != 0)
-      return failed;
+    if (const int failed = showKeptFrame(frame_number, status.str()); failed != 0) return failed;
     return done ? finishBracket(frame_number) : 0;
   }
 
@@ -935,6 +1027,7 @@ class Kiosk {
     PendingBracket bracket = std::move(*bracket_);
     bracket_.reset();
     source_->setManualExposure(std::nullopt);
+    settling_ = Settling{bracket.base, 0};
     const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
     const BracketSetup setup{bracket.view, bracket.outline, inputs_.rig,
                              tagDetectorSettings(inputs_.settings, inputs_.rig), merge,
@@ -965,6 +1058,8 @@ class Kiosk {
       return glm::u8vec3(p[0], p[1], p[2]);
     };
     inputs.hdr = std::move(merged.hdr_cube);
+    inputs.exposure = bracket.base;
+    inputs.exposure_locked = bracket.exposure_locked;
     return fitLights(frame_number, inputs);
   }
 
@@ -1042,8 +1137,8 @@ class Kiosk {
   void showStoredLighting(double now_s) {
     light_transition_.retarget(stored_lighting_->lights, now_s);
     // The stored state holds the dome, not the last fit's clipped lights.
-    lighting_.clipped_direction_w = {};
-    lighting_.clipped_diffuse_rgb = {};
+    clipped_lights_.clear();
+    setClippedLights({});
     lighting_.highlight_direction_w = glm::vec3(stored_lighting_->dominant.direction_w);
     lighting_.highlight_rgb = glm::vec3(stored_lighting_->dominant.rgb);
   }
@@ -1315,6 +1410,15 @@ class Kiosk {
   double last_exposure_us_ = 0.0, last_analogue_gain_ = 0.0;
   nlohmann::json exposure_at_last_fit_;  // null until a fit
   std::optional<PendingBracket> bracket_;  // an exposure bracket being taken
+  struct Settling {
+    FrameSource::ManualExposure base;  // the exposure to come back to
+    int frames_waited = 0;
+  };
+  std::optional<Settling> settling_;  // after a bracket, until the exposure is back
+  // The last fit's clipped lights, and what they are followed against.
+  std::vector<ibl::ClippedLight> clipped_lights_;
+  std::vector<double> clipped_share_at_fit_;
+  double clipped_exposure_at_fit_ = 1.0;
 };
 
 }  // namespace

@@ -311,6 +311,7 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
     glm::dvec3 omega;
     glm::dvec3 energy_rgb;  // extra radiance times solid angle
     double energy = 0.0;
+    std::uint32_t index = 0;  // face * n^2 + y * n + x
   };
   std::vector<Texel> texels;
   const int n = clipped_map.face_size;
@@ -328,13 +329,15 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
           continue;
         const glm::dvec3 extra = glm::max(glm::dvec3(real) - glm::dvec3(seen), glm::dvec3(0.0));
         const double solid_angle = cubeTexelSolidAngle(x, y, n);
-        Texel texel{cubeTexelCenterDirection(face, x, y, n), extra * solid_angle, luminance(extra) * solid_angle};
+        Texel texel{cubeTexelCenterDirection(face, x, y, n), extra * solid_angle, luminance(extra) * solid_angle,
+                    static_cast<std::uint32_t>(face * n * n + y * n + x)};
         if (texel.energy > 0.0) texels.push_back(texel);
       }
   std::sort(texels.begin(), texels.end(), [](const Texel& a, const Texel& b) { return a.energy > b.energy; });
   struct Cluster {
     glm::dvec3 seed;
     glm::dmat3 moment{0.0};  // column c: sum of energy_rgb[c] * omega
+    std::vector<const Texel*> members;
   };
   std::vector<Cluster> clusters;
   const double cos_radius = std::cos(cluster_radius_rad);
@@ -350,6 +353,7 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
       home = &clusters.back();
     }
     for (int c = 0; c < 3; ++c) home->moment[c] += texel.energy_rgb[c] * texel.omega;
+    home->members.push_back(&texel);
   }
   // Beyond max_lights, the faintest clusters join the nearest kept one (a
   // first moment adds).
@@ -365,6 +369,8 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
       if (glm::dot(clusters[k].seed, clusters[extra].seed) > glm::dot(clusters[nearest].seed, clusters[extra].seed))
         nearest = k;
     clusters[nearest].moment += clusters[extra].moment;
+    clusters[nearest].members.insert(clusters[nearest].members.end(), clusters[extra].members.begin(),
+                                     clusters[extra].members.end());
   }
   std::vector<ClippedLight> lights;
   for (std::size_t k = 0; k < kept; ++k) {
@@ -375,9 +381,31 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
     ClippedLight light;
     light.direction_w = luminance_moment / length;
     for (int c = 0; c < 3; ++c) light.irradiance_rgb[c] = std::max(0.0, glm::dot(clusters[k].moment[c], light.direction_w));
-    lights.push_back(light);
+    double total = 0.0;
+    for (const Texel* texel : clusters[k].members) total += texel->energy;
+    for (const Texel* texel : clusters[k].members) {
+      light.texels.push_back(texel->index);
+      light.texel_share.push_back(static_cast<float>(texel->energy / total));
+    }
+    lights.push_back(std::move(light));
   }
   return lights;
+}
+
+}  // namespace probelight::ibl
+
+namespace probelight::ibl {
+
+double stillClippedShare(const ClippedLight& light, const CubeMapRGB& live, double clip_level) {
+  const std::size_t per_face = static_cast<std::size_t>(live.face_size) * live.face_size;
+  double share = 0.0;
+  for (std::size_t i = 0; i < light.texels.size(); ++i) {
+    const std::size_t face = light.texels[i] / per_face, index = light.texels[i] % per_face;
+    if (face >= static_cast<std::size_t>(kCubeFaceCount)) return 0.0;  // a map of another size
+    const glm::vec3& texel = live.faces[face][index];
+    if (std::max({texel.r, texel.g, texel.b}) >= clip_level) share += light.texel_share[i];
+  }
+  return std::min(1.0, share);
 }
 
 }  // namespace probelight::ibl

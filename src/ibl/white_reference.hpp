@@ -138,7 +138,19 @@ WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::v
 struct ClippedLight {
   glm::dvec3 direction_w{0.0, 0.0, 1.0};
   glm::dvec3 irradiance_rgb{0.0};
+  // The texels it came from (face * n^2 + y * n + x of the map it was
+  // found in) and the share of its energy each held: which directions must
+  // still clip for it to still be there (stillClippedShare).
+  std::vector<std::uint32_t> texels;
+  std::vector<float> texel_share;
 };
+
+// The share of `light`'s energy whose texels still clip (largest channel
+// >= clip_level) in `live`, a later 8-bit map of the same size: 1 while the
+// sun or lamp is still there, 0 once it has gone (a cloud, a switch). The
+// frame-rate maps stay 8-bit; this is how they keep carrying the clipped
+// energy the last calibration measured, and drop it when it leaves.
+double stillClippedShare(const ClippedLight& light, const CubeMapRGB& live, double clip_level);
 std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMapRGB& clipped_map,
                                         const std::vector<float>* validity, double clip_level,
                                         const std::vector<std::uint8_t>* clipped_mask = nullptr, int max_lights = 4,

@@ -280,3 +280,34 @@ TEST(WhiteReference, TheBorderIsReadWithItsShadowLeftOutAndItsFailuresNamed) {
 
 }  // namespace
 }  // namespace probelight::ibl
+
+namespace probelight::ibl {
+namespace {
+
+TEST(WhiteReference, AClippedLightIsStillThereWhileItsTexelsClip) {
+  const std::vector<glm::dvec3> suns = {glm::normalize(glm::dvec3(0.3, -0.5, 0.8)),
+                                        glm::normalize(glm::dvec3(-0.8, 0.1, 0.4))};
+  const CubeMapRGB truth = skyWithSuns(suns, 0.4, 300.0);
+  const CubeMapRGB clipped = clip(truth, 1.0f);
+  const std::vector<ClippedLight> lights = clippedLights(truth, clipped, nullptr, 1.0);
+  ASSERT_EQ(lights.size(), 2u);
+  for (const ClippedLight& light : lights) {
+    ASSERT_FALSE(light.texels.empty());
+    double total = 0.0;
+    for (const float share : light.texel_share) total += share;
+    EXPECT_NEAR(total, 1.0, 1e-5);
+    // The same map: all of it still clips.
+    EXPECT_NEAR(stillClippedShare(light, clipped, 1.0), 1.0, 1e-5);
+  }
+  // The second sun goes behind a cloud: its light is gone, the first's stays.
+  const CubeMapRGB later = clip(skyWithSuns({suns[0]}, 0.4, 300.0), 1.0f);
+  for (const ClippedLight& light : lights) {
+    const bool first = glm::dot(light.direction_w, suns[0]) > 0.99;
+    EXPECT_NEAR(stillClippedShare(light, later, 1.0), first ? 1.0 : 0.0, 1e-5);
+  }
+  // A map of another size says nothing is there.
+  EXPECT_EQ(stillClippedShare(lights[0], CubeMapRGB(4), 1.0), 0.0);
+}
+
+}  // namespace
+}  // namespace probelight::ibl
