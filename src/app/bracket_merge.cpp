@@ -53,6 +53,14 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
   };
   std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.ev > b.ev; });
   std::vector<const BracketCandidate*> accepted;
+  // One tracker for all: seeded with the reference frame, it then searches
+  // only a window around the tag (a still camera finds it there at once).
+  tracking::TagTracker tracker(setup.detector, setup.rig, setup.view.camera);
+  {
+    std::vector<std::uint8_t> luma;
+    lumaFromRgb(reference, luma);
+    tracker.track(luma.data(), reference.width, reference.height, reference.width);
+  }
   const ImageRGB8* previous = &reference;
   double previous_ev = 0.0;
   for (const BracketCandidate& candidate : candidates) {
@@ -71,7 +79,6 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
     // found, the ball must be where the reference frame has it.
     std::vector<std::uint8_t> luma;
     lumaFromRgb(candidate.rgb, luma);
-    tracking::TagTracker tracker(setup.detector, setup.rig, setup.view.camera);
     const tracking::TagTrackResult track =
         tracker.track(luma.data(), candidate.rgb.width, candidate.rgb.height, candidate.rgb.width);
     std::string pose_check = "tag too dark to find: pose not checked";

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <thread>
+#include <vector>
 
 #include "ibl/color_transfer.hpp"
 
@@ -50,22 +53,51 @@ glm::dvec3 sampleLinearBilinear(const ImageRGBF& image, const glm::dvec2& pixel)
 }
 
 // Every texel whose direction the ball shows gets sampleLinear(pixel) /
-// reflectance; the blind spot stays 0.
+// reflectance; the blind spot stays 0. With samples_per_axis k > 1 a texel
+// takes as many samples a side as the pixels it spans (its corners'
+// distance in the image, rounded up, at most k): near the ball's middle a
+// texel is a fraction of a pixel and its centre says all (the bilinear
+// fetch already mixes the pixels around it), near the rim it spans several
+// and each needs a sample. Faces are shared among the machine's cores.
 template <typename SampleLinear>
 CubeMapRGB ballToCube(const MirrorBallView& view, const ProbeToCubeParams& params, SampleLinear sample_linear) {
   CubeMapRGB cube(params.face_size);
   const double inverse_reflectance = params.probe_reflectance > 0.0 ? 1.0 / params.probe_reflectance : 0.0;
-  const int k = std::max(1, params.samples_per_axis);
-  const double size = params.face_size;
-  for (int face = 0; face < kCubeFaceCount; ++face)
-    for (int y = 0; y < params.face_size; ++y)
-      for (int x = 0; x < params.face_size; ++x) {
+  const int k_max = std::max(1, params.samples_per_axis);
+  const int n = params.face_size;
+  const double size = n;
+  auto doFace = [&](int face) {
+    // Texel corners in the image (k_max > 1 only); nullopt: the blind spot.
+    std::vector<std::optional<glm::dvec2>> corners;
+    if (k_max > 1) {
+      corners.resize(static_cast<std::size_t>(n + 1) * (n + 1));
+      for (int y = 0; y <= n; ++y)
+        for (int x = 0; x <= n; ++x)
+          corners[static_cast<std::size_t>(y) * (n + 1) + x] = reflectedDirectionToPixel(
+              view, cubeCoordToDirection({face, x / size, y / size}), params.normal_iterations);
+    }
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        int k = 1;
+        if (k_max > 1) {
+          const auto& c00 = corners[static_cast<std::size_t>(y) * (n + 1) + x];
+          const auto& c10 = corners[static_cast<std::size_t>(y) * (n + 1) + x + 1];
+          const auto& c01 = corners[static_cast<std::size_t>(y + 1) * (n + 1) + x];
+          const auto& c11 = corners[static_cast<std::size_t>(y + 1) * (n + 1) + x + 1];
+          if (!c00 || !c10 || !c01 || !c11) {
+            k = k_max;  // at the blind spot's edge: as many as allowed
+          } else {
+            const double span_px = std::max({glm::length(*c10 - *c00), glm::length(*c01 - *c00),
+                                             glm::length(*c11 - *c10), glm::length(*c11 - *c01)});
+            k = std::clamp(static_cast<int>(std::ceil(span_px)), 1, k_max);
+          }
+        }
         glm::dvec3 sum(0.0);
         int seen = 0;
         for (int j = 0; j < k; ++j)
           for (int i = 0; i < k; ++i) {
             const glm::dvec3 direction_w =
-                k == 1 ? cubeTexelCenterDirection(face, x, y, params.face_size)
+                k == 1 ? cubeTexelCenterDirection(face, x, y, n)
                        : cubeCoordToDirection({face, (x + (i + 0.5) / k) / size, (y + (j + 0.5) / k) / size});
             const auto pixel = reflectedDirectionToPixel(view, direction_w, params.normal_iterations);
             if (!pixel) continue;  // the blind spot
@@ -74,6 +106,19 @@ CubeMapRGB ballToCube(const MirrorBallView& view, const ProbeToCubeParams& param
           }
         if (seen > 0) cube.texel(face, x, y) = glm::vec3(sum / static_cast<double>(seen) * inverse_reflectance);
       }
+  };
+  const int threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, kCubeFaceCount);
+  if (threads == 1 || n < 16) {
+    for (int face = 0; face < kCubeFaceCount; ++face) doFace(face);
+    return cube;
+  }
+  // Each face is written by one thread only.
+  std::vector<std::thread> workers;
+  for (int t = 0; t < threads; ++t)
+    workers.emplace_back([&, t] {
+      for (int face = t; face < kCubeFaceCount; face += threads) doFace(face);
+    });
+  for (std::thread& worker : workers) worker.join();
   return cube;
 }
 

@@ -12,11 +12,12 @@ struct ProbeToCubeParams {
   int face_size = 64;
   double probe_reflectance = 1.0;
   int normal_iterations = 4;  // fixed-point steps, the same count the shader unrolls
-  // Each texel is the mean of samples_per_axis^2 directions spread over it
-  // (1: its centre, as the GPU stage does). Near the ball's rim one texel
-  // spans many pixels; a light smaller than a pixel there (the sun in a
-  // merged HDR image) is then caught by some sample instead of being hit or
-  // missed whole by the centre.
+  // At most samples_per_axis^2 directions spread over each texel (1: its
+  // centre, as the GPU stage does); a texel takes as many a side as the
+  // pixels it spans. Near the ball's rim one texel spans many pixels; a
+  // light smaller than a pixel there (the sun in a merged HDR image) is then
+  // caught by some sample instead of being hit or missed whole by the
+  // centre.
   int samples_per_axis = 1;
   CameraTransfer camera_transfer;  // how the image's values decode to linear light
 };
