@@ -493,7 +493,7 @@ class Kiosk {
       if (event.kind == ButtonEvent::Kind::kLongPress) {
         // Back to the lighting stored at start-up (a fit that went wrong,
         // someone standing in front of the ball, is undone).
-        if (stored_lighting_ && machine_.state() == AppState::kRunning) {
+        if (stored_lighting_ && machine_.state() == AppState::kRunning && !bracket_) {
           showStoredLighting(frame_time_s_);
           report_.count("button_long_presses_restored");
           if (!options_.quiet) log_ << "probelight: button: long press: back to the stored lighting\n";
@@ -857,7 +857,9 @@ class Kiosk {
     if (!inputs_.settings.state.dir.empty()) {
       // Kept for the next start; a failed write leaves the old file whole.
       std::string save_error;
-      if (saveLighting(inputs_.settings.state.dir, {dome, light, ibl::toString(config.dome.placement)}, save_error))
+      StoredLighting stored{dome, light, ibl::toString(config.dome.placement), clipped_lights_, clipped_share_at_fit_,
+                            clipped_exposure_at_fit_};
+      if (saveLighting(inputs_.settings.state.dir, stored, save_error))
         report_.count("state_saves");
       else
         log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: lighting not saved: " << save_error << "\n";
@@ -1136,9 +1138,12 @@ class Kiosk {
 
   void showStoredLighting(double now_s) {
     light_transition_.retarget(stored_lighting_->lights, now_s);
-    // The stored state holds the dome, not the last fit's clipped lights.
-    clipped_lights_.clear();
-    setClippedLights({});
+    // And the fit's clipped lights, followed from the next map update on.
+    clipped_lights_ = stored_lighting_->clipped_lights;
+    clipped_share_at_fit_ = stored_lighting_->clipped_share_at_fit;
+    clipped_share_at_fit_.resize(clipped_lights_.size(), 0.0);
+    clipped_exposure_at_fit_ = stored_lighting_->exposure_at_fit;
+    setClippedLights(std::vector<double>(clipped_lights_.size(), 1.0));
     lighting_.highlight_direction_w = glm::vec3(stored_lighting_->dominant.direction_w);
     lighting_.highlight_rgb = glm::vec3(stored_lighting_->dominant.rgb);
   }

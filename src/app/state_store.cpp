@@ -85,6 +85,15 @@ bool saveLighting(const std::filesystem::path& state_dir, const StoredLighting& 
                       {"rgb", {l.rgb.r, l.rgb.g, l.rgb.b}},
                       {"spread_rad", l.spread_rad},
                       {"solid_angle_sr", l.solid_angle_sr}});
+  nlohmann::json clipped = nlohmann::json::array();
+  for (std::size_t k = 0; k < lighting.clipped_lights.size(); ++k) {
+    const ibl::ClippedLight& l = lighting.clipped_lights[k];
+    clipped.push_back({{"direction", {l.direction_w.x, l.direction_w.y, l.direction_w.z}},
+                       {"irradiance_rgb", {l.irradiance_rgb.r, l.irradiance_rgb.g, l.irradiance_rgb.b}},
+                       {"texels", l.texels},
+                       {"texel_share", l.texel_share},
+                       {"share_at_fit", k < lighting.clipped_share_at_fit.size() ? lighting.clipped_share_at_fit[k] : 0.0}});
+  }
   const auto& d = lighting.dominant;
   const nlohmann::json json = {
       {"format", "probelight lighting 1"},
@@ -93,7 +102,9 @@ bool saveLighting(const std::filesystem::path& state_dir, const StoredLighting& 
       {"dominant_light",
        {{"found", d.found},
         {"direction", {d.direction_w.x, d.direction_w.y, d.direction_w.z}},
-        {"rgb", {d.rgb.r, d.rgb.g, d.rgb.b}}}}};
+        {"rgb", {d.rgb.r, d.rgb.g, d.rgb.b}}}},
+      {"clipped_lights", clipped},
+      {"exposure_at_fit", lighting.exposure_at_fit}};
   return writeFileAtomically(lightingStatePath(state_dir), json.dump(2) + "\n", error);
 }
 
@@ -134,6 +145,23 @@ std::optional<StoredLighting> loadLighting(const std::filesystem::path& state_di
     stored.dominant.found = d.at("found").get<bool>();
     stored.dominant.direction_w = vec3(d.at("direction"));
     stored.dominant.rgb = vec3(d.at("rgb"));
+    for (const auto& l : json.value("clipped_lights", nlohmann::json::array())) {
+      ibl::ClippedLight light;
+      light.direction_w = vec3(l.at("direction"));
+      light.irradiance_rgb = vec3(l.at("irradiance_rgb"));
+      light.texels = l.at("texels").get<std::vector<std::uint32_t>>();
+      light.texel_share = l.at("texel_share").get<std::vector<float>>();
+      const double share = l.at("share_at_fit").get<double>();
+      if (!(std::abs(glm::length(light.direction_w) - 1.0) < 1e-6) || light.irradiance_rgb.r < 0 ||
+          light.irradiance_rgb.g < 0 || light.irradiance_rgb.b < 0 || light.texels.size() != light.texel_share.size() ||
+          !(share >= 0.0 && share <= 1.0))
+        throw std::runtime_error("a clipped light is not a unit direction with a non-negative irradiance and its texels");
+      stored.clipped_lights.push_back(std::move(light));
+      stored.clipped_share_at_fit.push_back(share);
+    }
+    stored.exposure_at_fit = json.value("exposure_at_fit", 1.0);
+    if (!(stored.exposure_at_fit > 0.0) || !std::isfinite(stored.exposure_at_fit))
+      throw std::runtime_error("exposure_at_fit is not a positive number");
     return stored;
   } catch (const std::exception& e) {
     error = path.string() + ": " + e.what();

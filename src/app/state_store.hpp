@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "ibl/light_dome.hpp"
+#include "ibl/white_reference.hpp"
 
 namespace probelight {
 
@@ -27,6 +28,13 @@ struct StoredLighting {
   std::vector<ibl::DomeLight> lights;
   ibl::DominantLight dominant;
   std::string placement;
+  // The fit's clipped lights (a bracket's or the white border's), with what
+  // the kiosk follows them against: the share of each that clipped in the
+  // fit's map, and the fit frame's exposure time x gain (1: unknown).
+  // Optional in the file: older files have none.
+  std::vector<ibl::ClippedLight> clipped_lights;
+  std::vector<double> clipped_share_at_fit;
+  double exposure_at_fit = 1.0;
 };
 
 // <dir>/lighting.json.

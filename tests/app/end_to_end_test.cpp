@@ -283,6 +283,14 @@ TEST_F(EndToEnd, LightingIsKeptInTheStateDirectoryAcrossRuns) {
   EXPECT_FALSE(report["state"]["loaded"].get<bool>()) << "nothing stored before the first run";
   EXPECT_EQ(report["counters"]["state_saves"], 1);
   ASSERT_TRUE(fs::exists(state / "lighting.json"));
+  {
+    // The studio's soft boxes clip: their light, measured by the fit's
+    // bracket, is kept with the dome.
+    std::string error;
+    const auto stored = loadLighting(state, error);
+    ASSERT_TRUE(stored) << error;
+    EXPECT_FALSE(stored->clipped_lights.empty());
+  }
 
   CommandResult second = run(flags + " --out " + (dir_ / "second").string());
   ASSERT_EQ(second.exit_status, 0) << second.stderr_text;

@@ -76,6 +76,14 @@ TEST_F(StateStore, LightingRoundTripsAndDamagedFilesAreClearErrors) {
   lighting.dominant.direction_w = light.direction_w;
   lighting.dominant.rgb = light.rgb;
   lighting.placement = "clustered";
+  ibl::ClippedLight sun;
+  sun.direction_w = glm::normalize(glm::dvec3(0.5, 0.1, 0.8));
+  sun.irradiance_rgb = {3.0, 2.9, 2.7};
+  sun.texels = {100, 101, 4197};
+  sun.texel_share = {0.5f, 0.25f, 0.25f};
+  lighting.clipped_lights = {sun};
+  lighting.clipped_share_at_fit = {0.75};
+  lighting.exposure_at_fit = 2500.0;
   std::string error;
   ASSERT_TRUE(saveLighting(dir_ / "state", lighting, error)) << error;  // creates the directory
   const auto loaded = loadLighting(dir_ / "state", error);
@@ -85,6 +93,13 @@ TEST_F(StateStore, LightingRoundTripsAndDamagedFilesAreClearErrors) {
   EXPECT_EQ(loaded->lights[1].rgb, light.rgb);
   EXPECT_EQ(loaded->placement, "clustered");
   EXPECT_TRUE(loaded->dominant.found);
+  ASSERT_EQ(loaded->clipped_lights.size(), 1u);
+  EXPECT_NEAR(glm::length(loaded->clipped_lights[0].direction_w - sun.direction_w), 0.0, 1e-12);
+  EXPECT_EQ(loaded->clipped_lights[0].irradiance_rgb, sun.irradiance_rgb);
+  EXPECT_EQ(loaded->clipped_lights[0].texels, sun.texels);
+  EXPECT_EQ(loaded->clipped_lights[0].texel_share, sun.texel_share);
+  EXPECT_EQ(loaded->clipped_share_at_fit, std::vector<double>{0.75});
+  EXPECT_EQ(loaded->exposure_at_fit, 2500.0);
 
   // No file yet: nothing, and no error (the first boot).
   EXPECT_FALSE(loadLighting(dir_ / "empty", error));
@@ -95,7 +110,12 @@ TEST_F(StateStore, LightingRoundTripsAndDamagedFilesAreClearErrors) {
   for (const std::string& bad : {good.substr(0, good.size() / 2), std::string("{\"format\": \"something else\"}"),
                                  std::string("{\"format\": \"probelight lighting 1\", \"lights\": [{\"direction\": [0, 0, 2], "
                                              "\"rgb\": [1, 1, 1], \"spread_rad\": 0.1}], \"dominant_light\": {\"found\": "
-                                             "false, \"direction\": [0, 0, 1], \"rgb\": [0, 0, 0]}}")}) {
+                                             "false, \"direction\": [0, 0, 1], \"rgb\": [0, 0, 0]}}"),
+                                 // A clipped light with fewer shares than texels.
+                                 std::string("{\"format\": \"probelight lighting 1\", \"lights\": [], \"dominant_light\": "
+                                             "{\"found\": false, \"direction\": [0, 0, 1], \"rgb\": [0, 0, 0]}, "
+                                             "\"clipped_lights\": [{\"direction\": [0, 0, 1], \"irradiance_rgb\": [1, 1, 1], "
+                                             "\"texels\": [1, 2], \"texel_share\": [1], \"share_at_fit\": 1}]}")}) {
     std::ofstream(path) << bad;
     EXPECT_FALSE(loadLighting(dir_ / "state", error)) << bad;
     EXPECT_NE(error.find(path.string()), std::string::npos) << error;
