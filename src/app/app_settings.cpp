@@ -193,6 +193,8 @@ AppSettings loadAppSettings(const std::string& path) {
       sim.readInt("camera_lost_at_frame", settings.sim.camera_lost_at_frame, Range::atLeast(-1));
   settings.sim.camera_lost_restarts =
       sim.readInt("camera_lost_restarts", settings.sim.camera_lost_restarts, Range::closed(0, 1000));
+  settings.sim.min_exposure_us =
+      sim.readDouble("min_exposure_us", settings.sim.min_exposure_us, Range::closed(0.0, 1e6));
   sim.rejectUnknownFields();
 
   ConfigReader output = file.section("output");

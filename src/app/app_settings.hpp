@@ -113,6 +113,9 @@ struct SimConfig {
   // fails, then the first `camera_lost_restarts` reconnects fail too.
   int camera_lost_at_frame = -1;  // -1: never
   int camera_lost_restarts = 2;
+  // The shortest exposure the simulated sensor can take (microseconds; 0: any),
+  // as real sensors have one: a bracket asking for less gets this.
+  double min_exposure_us = 0.0;
 };
 
 struct ButtonConfig {

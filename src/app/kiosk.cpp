@@ -341,6 +341,7 @@ class Kiosk {
                                                                   : PixelLayout::kRgb8;
     camera_options.lost_at_frame = settings.sim.camera_lost_at_frame;
     camera_options.failed_restarts = settings.sim.camera_lost_restarts;
+    camera_options.min_exposure_us = settings.sim.min_exposure_us;
     source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), 3, camera_options);
     return 0;
   }
@@ -932,9 +933,16 @@ class Kiosk {
   // A frame counts as the requested exposure within this many stops of it
   // (sensors round exposure time to whole lines).
   static constexpr double kBracketEvMatchStops = 0.25;
+  // Frames after a request before a shorter-than-asked frame is taken as
+  // the sensor's limit rather than one still in flight.
+  static constexpr int kBracketClampedAfterFrames = 3;
 
+  // Shorter by `ev` stops: the gain comes down to 1 first (any sensor takes
+  // it, and it adds noise), then the exposure time, which sensors bound
+  // below.
   static FrameSource::ManualExposure exposureAt(const FrameSource::ManualExposure& base, double ev) {
-    return {base.exposure_us * std::exp2(ev), base.analogue_gain};
+    const double gain = std::min(base.analogue_gain, 1.0);
+    return {base.exposure_us * base.analogue_gain / gain * std::exp2(ev), gain};
   }
 
   bool startBracket(const FrameBuffer& frame, std::uint64_t frame_number, const ibl::MirrorBallView& view,
@@ -997,14 +1005,24 @@ class Kiosk {
     const LightsConfig& config = inputs_.settings.lights;
     const double ev = stopsFrom(frame, bracket.base);
     bool done = false;
-    if (std::isfinite(ev) && std::abs(ev - bracket.requested_ev) <= kBracketEvMatchStops) {
+    const double last_ev = bracket.frames.empty() ? 0.0 : bracket.frames.back().ev;
+    // A sensor that cannot expose as short as asked delivers its shortest:
+    // a frame, some frames after the request, clearly shorter than the last
+    // one is that. It is kept (its EV is its metadata's), and the bracket
+    // ends there: asking for less would give the same again.
+    const bool clamped = std::isfinite(ev) && bracket.frames_waited >= kBracketClampedAfterFrames &&
+                         ev < last_ev - 2.0 * kBracketEvMatchStops &&
+                         std::abs(ev - bracket.requested_ev) > kBracketEvMatchStops;
+    if (clamped) report_.count("bracket_exposures_clamped");
+    if (std::isfinite(ev) && (std::abs(ev - bracket.requested_ev) <= kBracketEvMatchStops || clamped)) {
       BracketCandidate candidate{"camera frame " + std::to_string(frame_number), ev, frameRgb(frame)};
       const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
       const bool still_clips = ballPixelCodes(candidate.rgb, bracket.outline, merge).clipped > 0;
       bracket.frames.push_back(std::move(candidate));
       bracket.frames_waited = 0;
       report_.count("bracket_frames");
-      if (still_clips && bracket.requested_ev - config.bracket_step_stops >= -config.bracket_max_stops - 1e-9) {
+      if (still_clips && !clamped &&
+          bracket.requested_ev - config.bracket_step_stops >= -config.bracket_max_stops - 1e-9) {
         bracket.requested_ev -= config.bracket_step_stops;
         source_->setManualExposure(exposureAt(bracket.base, bracket.requested_ev));
       } else {

@@ -1,5 +1,6 @@
 #include "capture/sim_frame_source.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 
@@ -71,6 +72,7 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
     std::lock_guard<std::mutex> lock(exposure_mutex_);
     if (manual_exposure_) exposure = *manual_exposure_;
   }
+  exposure.exposure_us = std::max(exposure.exposure_us, options_.min_exposure_us);
   const double exposure_ev = std::log2(exposure.exposure_us * exposure.analogue_gain / kSimExposureUs);
   try {
     FrameTruth truth;

@@ -24,6 +24,9 @@ struct SimCameraOptions {
   // then the next `failed_restarts` start() calls fail; the one after
   // succeeds and frames go on from where they stopped. -1: never.
   std::int64_t lost_at_frame = -1;
+  // The sensor's shortest exposure (microseconds; 0: any): a manual
+  // exposure below it is taken at it, and the metadata says so.
+  double min_exposure_us = 0.0;
   int failed_restarts = 0;
 };
 

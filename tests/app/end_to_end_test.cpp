@@ -753,3 +753,36 @@ TEST_F(EndToEnd, ClippedLightsFollowTheMapsAfterTheFit) {
 
 }  // namespace
 }  // namespace probelight
+
+namespace probelight {
+namespace {
+
+// A sensor that cannot expose shorter than 100 us (the simulated one here,
+// sim.min_exposure_us; real ones have such a limit): the bracket asks for
+// EV -3 (1250 us), -6 (156 us), then -9 (20 us) and gets 100 us (EV -6.6).
+// That frame is kept at the EV its metadata says, the bracket ends there,
+// and the merge says what still clipped. The lights are fitted all the same.
+TEST_F(EndToEnd, ASensorsShortestExposureEndsTheBracketWithWhatItGave) {
+  const fs::path config = dir_ / "limited.yaml";
+  std::ofstream(config) << "sim:\n  env: sun_sky\n  min_exposure_us: 100\n";
+  const fs::path out = dir_ / "out";
+  const CommandResult result =
+      run("run --frames 30 --save-every 0 --path static --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  EXPECT_EQ(report["counters"]["bracket_exposures_clamped"], 1) << report["counters"].dump();
+  EXPECT_EQ(report["counters"]["calibrations_completed"], 1);
+  const nlohmann::json& hdr = report["hdr"];
+  ASSERT_EQ(hdr["method"], "bracket") << hdr.dump(2);
+  ASSERT_EQ(hdr["frames"].size(), 3u) << hdr.dump(2);
+  const nlohmann::json& last = hdr["frames"][2];
+  EXPECT_TRUE(last["used"].get<bool>()) << last.dump();
+  EXPECT_NEAR(last["ev"].get<double>(), std::log2(100.0 / 10000.0), 1e-6);
+  // The sun needs EV -12 here: at -6.6 some of it still clips, and the
+  // status says so.
+  EXPECT_GT(hdr["still_clipped_ball_px"].get<int>(), 0);
+  EXPECT_NE(hdr["status"].get<std::string>().find("clipped even in the shortest"), std::string::npos) << hdr.dump();
+}
+
+}  // namespace
+}  // namespace probelight
