@@ -459,7 +459,7 @@ class Analyzer {
     hdr_reflection_ = std::move(merged.hdr_cube);
     hdr["method"] = "bracket";
     hdr["status"] = merged.status;
-    hdr["still_clipped_ball_px"] = merged.still_clipped_ball_px;
+    hdr["still_clipped_sr"] = merged.still_clipped_sr;
     hdr["ms"] = msSince(start);
     result_.json["hdr"] = hdr;
   }

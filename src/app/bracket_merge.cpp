@@ -53,6 +53,8 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
   };
   std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.ev > b.ev; });
   std::vector<const BracketCandidate*> accepted;
+  std::vector<ibl::MirrorBallView> accepted_views;
+  ibl::MirrorBallView last_view = setup.view;  // the pose of the frame before
   // One tracker for all: seeded with the reference frame, it then searches
   // only a window around the tag (a still camera finds it there at once).
   tracking::TagTracker tracker(setup.detector, setup.rig, setup.view.camera);
@@ -81,16 +83,26 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
     lumaFromRgb(candidate.rgb, luma);
     const tracking::TagTrackResult track =
         tracker.track(luma.data(), candidate.rgb.width, candidate.rgb.height, candidate.rgb.width);
-    std::string pose_check = "tag too dark to find: pose not checked";
+    std::string pose_check = setup.untracked_take_previous_pose
+                                 ? "tag too dark to find: merged with the pose of the frame before"
+                                 : "tag too dark to find: merged with the reference frame's pose";
+    ibl::MirrorBallView view = setup.untracked_take_previous_pose ? last_view : setup.view;
     if (track.found) {
-      const ibl::ProbeOutline there = ibl::computeProbeOutline(
-          ibl::MirrorBallView{setup.view.camera, track.pose, setup.view.center_w, setup.view.radius_m});
+      view = ibl::MirrorBallView{setup.view.camera, track.pose, setup.view.center_w, setup.view.radius_m};
+      const ibl::ProbeOutline there = ibl::computeProbeOutline(view);
       const double moved_px = glm::length(there.center_px - setup.outline.center_px);
-      if (moved_px > kBracketMaxBallShiftPx) {
-        refuse(candidate, "the camera moved: the ball is " + fixed(moved_px, 2) + " px from where the reference frame has it");
+      if (!there.valid || moved_px > kBracketMaxBallShiftRadii * setup.outline.radius_px) {
+        refuse(candidate, "the camera moved too far between exposures: the ball is " + fixed(moved_px, 1) +
+                              " px from where the reference frame has it (a tenth of its radius, " +
+                              fixed(kBracketMaxBallShiftRadii * setup.outline.radius_px, 1) + " px, is the most)");
         continue;
       }
-      pose_check = "ball within " + fixed(moved_px, 2) + " px of the reference frame's";
+      if (moved_px <= kBracketPoseNoisePx) {
+        view = setup.view;
+        pose_check = "ball " + fixed(moved_px, 2) + " px from the reference frame's: within the pose's noise, merged with its pose";
+      } else {
+        pose_check = "merged with its own pose: ball " + fixed(moved_px, 2) + " px from the reference frame's";
+      }
     }
     // The exposure the pixels show against the one claimed.
     const std::optional<double> ratio = ibl::measureExposureRatio(*previous, candidate.rgb, setup.merge);
@@ -107,6 +119,8 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
     }
     result.frames.push_back(entry);
     accepted.push_back(&candidate);
+    accepted_views.push_back(view);
+    last_view = view;
     previous = &candidate.rgb;
     previous_ev = candidate.ev;
   }
@@ -115,21 +129,24 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
     result.status = "no usable bracket frame";
     return result;
   }
-  std::vector<ibl::BracketFrame> frames{{&reference, 0.0}};
-  for (const BracketCandidate* candidate : accepted) frames.push_back({&candidate->rgb, candidate->ev});
-  const ibl::HdrMergeResult merged = ibl::mergeBracket(frames, setup.merge);
+  std::vector<ibl::BracketView> frames{{&reference, 0.0, setup.view}};
+  for (std::size_t k = 0; k < accepted.size(); ++k) frames.push_back({&accepted[k]->rgb, accepted[k]->ev, accepted_views[k]});
   ibl::ProbeToCubeParams params;
   params.face_size = setup.face_size;
   params.probe_reflectance = setup.rig.probe_reflectance;
   params.camera_transfer = setup.merge.camera_transfer;
   params.samples_per_axis = 4;
-  result.hdr_cube = ibl::probeRadianceToCubeMap(setup.view, merged.linear, params);
-  forEachBallPixel(setup.outline, reference.width, reference.height, [&](int x, int y) {
-    result.still_clipped_ball_px += merged.still_clipped[static_cast<std::size_t>(y) * reference.width + x];
-  });
-  result.status = result.still_clipped_ball_px > 0
-                      ? "merged; " + std::to_string(result.still_clipped_ball_px) +
-                            " ball pixels clipped even in the shortest exposure (a lower bound there)"
+  std::vector<std::uint8_t> still_clipped;
+  result.hdr_cube = ibl::bracketToCubeMap(frames, setup.merge, params, &still_clipped);
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face)
+    for (int y = 0; y < setup.face_size; ++y)
+      for (int x = 0; x < setup.face_size; ++x)
+        if (still_clipped[static_cast<std::size_t>(face) * setup.face_size * setup.face_size +
+                          static_cast<std::size_t>(y) * setup.face_size + x])
+          result.still_clipped_sr += ibl::cubeTexelSolidAngle(x, y, setup.face_size);
+  result.status = result.still_clipped_sr > 0.0
+                      ? "merged; " + fixed(result.still_clipped_sr, 4) +
+                            " sr clipped even in the shortest exposure (a lower bound there)"
                       : "merged";
   return result;
 }

@@ -19,11 +19,23 @@
 
 namespace probelight {
 
-// A bracket frame whose ball sits further than this from the reference
-// frame's (the camera or the rig moved between exposures) would smear every
-// edge of the merged map; tag poses agree to a few hundredths of a pixel
-// when nothing moved.
-constexpr double kBracketMaxBallShiftPx = 1.0;
+// Each bracket frame is merged through its own pose (ibl::bracketToCubeMap),
+// so a camera that moves a little between exposures (a hand held still) is
+// fine. Further, the frames see the ball from different sides: its rim,
+// where one pixel spans many degrees, falls on other directions in each,
+// and the merge (which weighs codes, not resolution) degrades: in
+// tests/app/analyze_test.cpp's sun and sky view, a frame whose ball moved
+// 2.7 px kept the irradiance within the 5%, one that moved 21 px
+// took it to 7.5%. A frame whose ball moved more than this fraction of its
+// radius is refused; that also keeps valid each frame's check of its
+// exposure against the frame before (pixel against pixel).
+constexpr double kBracketMaxBallShiftRadii = 0.1;
+// Below this the frame is taken to be where the reference is: a tag seen
+// in good light puts the ball within a few hundredths of a pixel, but at a
+// short exposure the tag is dim and its pose scatters by up to half a
+// pixel (measured on the simulator), which would misplace a sun more than
+// a still camera does.
+constexpr double kBracketPoseNoisePx = 1.0;
 // A frame whose pixels say another exposure than its label by more than
 // this many stops is refused: its EV is wrong, or the light changed.
 constexpr double kBracketMaxEvDisagreement = 0.5;
@@ -50,12 +62,17 @@ struct BracketSetup {
   tracking::TagDetectorSettings detector;
   ibl::HdrMergeSettings merge;
   int face_size = 64;
+  // A frame whose tag is too dark to find: true, it takes the pose of the
+  // frame before it (frames in the order the camera took them, as `run`
+  // takes a bracket); false, the reference's (files said to show the same
+  // view, in no known order).
+  bool untracked_take_previous_pose = false;
 };
 
 struct BracketMergeResult {
   nlohmann::json frames = nlohmann::json::array();  // each candidate: label, ev, used, reason | pose, measured_ev
   std::optional<ibl::CubeMapRGB> hdr_cube;           // empty when no candidate was usable
-  long still_clipped_ball_px = 0;
+  double still_clipped_sr = 0.0;  // directions clipped even in the shortest exposure
   std::string status;
   int used = 0;
 };
@@ -63,11 +80,13 @@ struct BracketMergeResult {
 // Checks each candidate (brightest first, each against the one before it,
 // with which it shares the most well-exposed pixels) and leaves out, with
 // its reason, those whose ball is all clipped or all black, whose tag puts
-// the ball more than kBracketMaxBallShiftPx from the reference's (where the
-// tag is bright enough to be found), or whose pixels disagree with its EV;
-// `refused` is told of each. The rest are merged with the reference
-// (ibl::mergeBracket) and projected into a cube map with 4 x 4 directions
-// per texel (a sun smaller than a rim pixel is caught, not hit or missed).
+// the ball further than kBracketMaxBallShiftRadii of its radius from the
+// reference's, or whose pixels
+// disagree with its EV; `refused` is told of each. The rest are merged
+// with the reference direction by direction, each through its own pose
+// (ibl::bracketToCubeMap, up to 4 x 4 directions a texel: a sun smaller
+// than a rim pixel is caught, not hit or missed). A frame whose tag is too
+// dark to find takes a pose as setup.untracked_take_previous_pose says.
 BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<BracketCandidate> candidates,
                                      const BracketSetup& setup,
                                      const std::function<void(const BracketCandidate&, const std::string&)>& refused);

@@ -1049,9 +1049,11 @@ class Kiosk {
     source_->setManualExposure(std::nullopt);
     settling_ = Settling{bracket.base, 0};
     const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
+    // The camera took them in order: a frame too dark to show the tag was
+    // taken right after the one before it.
     const BracketSetup setup{bracket.view, bracket.outline, inputs_.rig,
                              tagDetectorSettings(inputs_.settings, inputs_.rig), merge,
-                             maps_.reflection().face_size};
+                             maps_.reflection().face_size, true};
     BracketMergeResult merged;
     {
       StageTimer timer(report_, "bracket_merge");
@@ -1066,7 +1068,7 @@ class Kiosk {
     report_.extra["hdr"] = {{"method", merged.hdr_cube ? "bracket" : "none"},
                             {"status", merged.status},
                             {"frames", merged.frames},
-                            {"still_clipped_ball_px", merged.still_clipped_ball_px},
+                            {"still_clipped_sr", merged.still_clipped_sr},
                             {"camera_frames", frame_number - bracket.started_frame},
                             // From the fit frame to the merged map: the camera's frames plus the merge.
                             {"wall_ms", 1000.0 * (monotonicNowS() - bracket.started_s)}};

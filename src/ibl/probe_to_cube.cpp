@@ -1,6 +1,7 @@
 #include "ibl/probe_to_cube.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <thread>
@@ -59,9 +60,14 @@ glm::dvec3 sampleLinearBilinear(const ImageRGBF& image, const glm::dvec2& pixel)
 // texel is a fraction of a pixel and its centre says all (the bilinear
 // fetch already mixes the pixels around it), near the rim it spans several
 // and each needs a sample. Faces are shared among the machine's cores.
-template <typename SampleLinear>
-CubeMapRGB ballToCube(const MirrorBallView& view, const ProbeToCubeParams& params, SampleLinear sample_linear) {
+// `sample(direction_w, lower_bound)` gives the linear value seen in that
+// direction (nullopt: not seen) and may set lower_bound; `lower_bounds`,
+// when given, gets 1 for each texel with such a sample.
+template <typename SampleDirection>
+CubeMapRGB sampleCube(const MirrorBallView& view, const ProbeToCubeParams& params, SampleDirection sample,
+                      std::vector<std::uint8_t>* lower_bounds = nullptr) {
   CubeMapRGB cube(params.face_size);
+  if (lower_bounds) lower_bounds->assign(static_cast<std::size_t>(kCubeFaceCount) * params.face_size * params.face_size, 0);
   const double inverse_reflectance = params.probe_reflectance > 0.0 ? 1.0 / params.probe_reflectance : 0.0;
   const int k_max = std::max(1, params.samples_per_axis);
   const int n = params.face_size;
@@ -99,10 +105,13 @@ CubeMapRGB ballToCube(const MirrorBallView& view, const ProbeToCubeParams& param
             const glm::dvec3 direction_w =
                 k == 1 ? cubeTexelCenterDirection(face, x, y, n)
                        : cubeCoordToDirection({face, (x + (i + 0.5) / k) / size, (y + (j + 0.5) / k) / size});
-            const auto pixel = reflectedDirectionToPixel(view, direction_w, params.normal_iterations);
-            if (!pixel) continue;  // the blind spot
-            sum += sample_linear(*pixel);
+            bool lower_bound = false;
+            const std::optional<glm::dvec3> value = sample(direction_w, lower_bound);
+            if (!value) continue;  // the blind spot
+            sum += *value;
             ++seen;
+            if (lower_bound && lower_bounds)
+              (*lower_bounds)[static_cast<std::size_t>(face) * n * n + static_cast<std::size_t>(y) * n + x] = 1;
           }
         if (seen > 0) cube.texel(face, x, y) = glm::vec3(sum / static_cast<double>(seen) * inverse_reflectance);
       }
@@ -122,14 +131,135 @@ CubeMapRGB ballToCube(const MirrorBallView& view, const ProbeToCubeParams& param
   return cube;
 }
 
+// Each frame's pixels as linear light, and how much each is worth: the
+// merge's hat weight times the frame's exposure ratio (0 where the code is
+// clipped or lost in the noise).
+struct WeightedFrame {
+  const BracketView* frame;
+  double ratio;
+  std::vector<glm::vec3> linear;  // decoded / ratio: the reference exposure's units
+  std::vector<glm::vec3> weight;
+  std::vector<std::uint8_t> clipped;  // some channel at or above the clip
+  std::vector<std::uint8_t> clipped_channel;  // bit c: channel c at or above the clip
+};
+
 }  // namespace
+
+CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMergeSettings& merge,
+                            const ProbeToCubeParams& params, std::vector<std::uint8_t>* still_clipped) {
+  if (frames.empty() || !frames.front().image || frames.front().image->empty()) return CubeMapRGB(params.face_size);
+  std::array<double, 256> decoded{};
+  for (int code = 0; code < 256; ++code) decoded[static_cast<std::size_t>(code)] = decodeCameraValue(merge.camera_transfer, code / 255.0);
+  std::vector<WeightedFrame> weighted;
+  std::size_t shortest = 0, longest = 0;
+  for (const BracketView& frame : frames) {
+    WeightedFrame w{&frame, std::exp2(frame.ev), {}, {}, {}, {}};
+    const std::size_t count = static_cast<std::size_t>(frame.image->width) * frame.image->height;
+    w.linear.resize(count);
+    w.weight.resize(count);
+    w.clipped.resize(count);
+    w.clipped_channel.resize(count);
+    for (std::size_t i = 0; i < count; ++i)
+      for (int c = 0; c < 3; ++c) {
+        const int code = frame.image->pixels[3 * i + static_cast<std::size_t>(c)];
+        w.linear[i][c] = static_cast<float>(decoded[static_cast<std::size_t>(code)] / w.ratio);
+        const int hat = (code <= merge.dark_code || code >= merge.clip_code)
+                            ? 0
+                            : std::min(code - merge.dark_code, merge.clip_code - code);
+        w.weight[i][c] = static_cast<float>(hat * w.ratio);
+        if (code >= merge.clip_code) {
+          w.clipped[i] = 1;
+          w.clipped_channel[i] |= static_cast<std::uint8_t>(1u << c);
+        }
+      }
+    weighted.push_back(std::move(w));
+  }
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    if (frames[f].ev < frames[shortest].ev) shortest = f;
+    if (frames[f].ev > frames[longest].ev) longest = f;
+  }
+  // Bilinear over a frame's four pixels around `pixel`, of each pixel's
+  // weighted value and weight (a clipped pixel adds nothing, instead of
+  // pulling its neighbours' codes up as interpolated codes would).
+  struct Taps {
+    int index[4];
+    double share[4];
+  };
+  auto taps = [](const ImageRGB8& image, const glm::dvec2& pixel) {
+    const double u0 = std::floor(pixel.x), v0 = std::floor(pixel.y);
+    const double fu = pixel.x - u0, fv = pixel.y - v0;
+    const int x0 = std::clamp(static_cast<int>(u0), 0, image.width - 1), x1 = std::clamp(static_cast<int>(u0) + 1, 0, image.width - 1);
+    const int y0 = std::clamp(static_cast<int>(v0), 0, image.height - 1), y1 = std::clamp(static_cast<int>(v0) + 1, 0, image.height - 1);
+    return Taps{{y0 * image.width + x0, y0 * image.width + x1, y1 * image.width + x0, y1 * image.width + x1},
+                {(1 - fu) * (1 - fv), fu * (1 - fv), (1 - fu) * fv, fu * fv}};
+  };
+  const MirrorBallView& reference = frames.front().view;
+  return sampleCube(
+      reference, params,
+      [&](const glm::dvec3& direction_w, bool& lower_bound) -> std::optional<glm::dvec3> {
+        // Per frame and channel: the bilinear value, counted only where none
+        // of the four pixels clipped in that channel (so a clipped sun pixel
+        // never hides behind its neighbours), weighted by the bilinear hat
+        // weights times the exposure ratio (so pixels lost in the noise
+        // count little, and nothing when all four are).
+        glm::dvec3 sum(0.0), weight_sum(0.0);
+        std::optional<Taps> at_shortest, at_longest;
+        bool seen = false;
+        for (std::size_t f = 0; f < weighted.size(); ++f) {
+          const auto pixel = reflectedDirectionToPixel(frames[f].view, direction_w, params.normal_iterations);
+          if (!pixel) continue;
+          seen = true;
+          const Taps t = taps(*frames[f].image, *pixel);
+          if (f == shortest) at_shortest = t;
+          if (f == longest) at_longest = t;
+          for (int c = 0; c < 3; ++c) {
+            double value = 0.0, weight = 0.0;
+            bool measured = true;
+            for (int k = 0; k < 4; ++k) {
+              if (t.share[k] <= 0.0) continue;
+              const std::size_t i = static_cast<std::size_t>(t.index[k]);
+              measured = measured && !(weighted[f].clipped_channel[i] & (1u << c));
+              value += t.share[k] * weighted[f].linear[i][c];
+              weight += t.share[k] * weighted[f].weight[i][c];
+            }
+            if (!measured || weight <= 0.0) continue;
+            sum[c] += weight * value;
+            weight_sum[c] += weight;
+          }
+        }
+        if (!seen) return std::nullopt;
+        glm::dvec3 value(0.0);
+        for (int c = 0; c < 3; ++c) {
+          if (weight_sum[c] > 0.0) {
+            value[c] = sum[c] / weight_sum[c];
+            continue;
+          }
+          // No frame measured it: the shortest exposure's value, a lower
+          // bound where it clipped; else (all dark) the longest's.
+          bool shortest_clipped = false;
+          if (at_shortest)
+            for (int k = 0; k < 4; ++k)
+              shortest_clipped = shortest_clipped ||
+                                 (at_shortest->share[k] > 0.0 && weighted[shortest].clipped[static_cast<std::size_t>(at_shortest->index[k])]);
+          const bool use_shortest = at_shortest && (shortest_clipped || !at_longest);
+          const Taps& t = use_shortest ? *at_shortest : *at_longest;
+          const std::size_t f = use_shortest ? shortest : longest;
+          for (int k = 0; k < 4; ++k) value[c] += t.share[k] * weighted[f].linear[static_cast<std::size_t>(t.index[k])][c];
+          if (use_shortest && shortest_clipped) lower_bound = true;
+        }
+        return value;
+      },
+      still_clipped);
+}
 
 CubeMapRGB probeImageToCubeMap(const MirrorBallView& view, const ImageRGB8& image, const ProbeToCubeParams& params) {
   if (image.empty()) return CubeMapRGB(params.face_size);
   const CameraTransfer& transfer = params.camera_transfer;
-  return ballToCube(view, params, [&](const glm::dvec2& pixel) {
+  return sampleCube(view, params, [&](const glm::dvec3& direction_w, bool&) -> std::optional<glm::dvec3> {
+    const auto pixel = reflectedDirectionToPixel(view, direction_w, params.normal_iterations);
+    if (!pixel) return std::nullopt;
     // Encoded values are interpolated, then decoded: what the GPU stage does.
-    const glm::dvec3 encoded = sampleEncodedBilinear(image, pixel);
+    const glm::dvec3 encoded = sampleEncodedBilinear(image, *pixel);
     return glm::dvec3{decodeCameraValue(transfer, encoded.r), decodeCameraValue(transfer, encoded.g),
                       decodeCameraValue(transfer, encoded.b)};
   });
@@ -137,7 +267,11 @@ CubeMapRGB probeImageToCubeMap(const MirrorBallView& view, const ImageRGB8& imag
 
 CubeMapRGB probeRadianceToCubeMap(const MirrorBallView& view, const ImageRGBF& linear, const ProbeToCubeParams& params) {
   if (linear.empty()) return CubeMapRGB(params.face_size);
-  return ballToCube(view, params, [&](const glm::dvec2& pixel) { return sampleLinearBilinear(linear, pixel); });
+  return sampleCube(view, params, [&](const glm::dvec3& direction_w, bool&) -> std::optional<glm::dvec3> {
+    const auto pixel = reflectedDirectionToPixel(view, direction_w, params.normal_iterations);
+    if (!pixel) return std::nullopt;
+    return sampleLinearBilinear(linear, *pixel);
+  });
 }
 
 }  // namespace probelight::ibl

@@ -1,9 +1,13 @@
 // CPU reference of stage 2: the ball's image to a world-aligned cube map.
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "core/types.hpp"
 #include "ibl/color_transfer.hpp"
 #include "ibl/cube_map.hpp"
+#include "ibl/hdr_bracket.hpp"
 #include "ibl/mirror_ball.hpp"
 
 namespace probelight::ibl {
@@ -36,5 +40,28 @@ CubeMapRGB probeImageToCubeMap(const MirrorBallView& view, const ImageRGB8& imag
 // ibl/hdr_bracket): sampled bilinearly in linear values, divided by the
 // reflectance, unbounded. camera_transfer is not used.
 CubeMapRGB probeRadianceToCubeMap(const MirrorBallView& view, const ImageRGBF& linear, const ProbeToCubeParams& params);
+
+// One frame of an exposure bracket, and the ball as that frame saw it (its
+// own pose: a hand-held camera moves between exposures).
+struct BracketView {
+  const ImageRGB8* image = nullptr;
+  double ev = 0.0;  // stops from frames[0]'s exposure
+  MirrorBallView view;
+};
+
+// An exposure bracket merged direction by direction: each sample direction
+// of each texel (samples_per_axis as above, spans measured in frames[0]'s
+// view) is found in every frame through that frame's own view, and the
+// frames' pixels around it are merged as ibl::mergeBracket merges a pixel
+// (hat weight times exposure ratio, each pixel weighted before the
+// bilinear sum, so a clipped pixel adds nothing). Registering each frame
+// by its own pose, rather than merging pixels at the same place, is what
+// lets a camera that moved between exposures be merged. Values are in
+// frames[0]'s camera linear units divided by the reflectance.
+// still_clipped (optional): per texel (face * n^2 + y * n + x), 1 where
+// some channel no frame measured clipped even in the shortest exposure (a
+// lower bound).
+CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMergeSettings& merge,
+                            const ProbeToCubeParams& params, std::vector<std::uint8_t>* still_clipped = nullptr);
 
 }  // namespace probelight::ibl

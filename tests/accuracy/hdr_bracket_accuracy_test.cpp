@@ -185,18 +185,20 @@ TEST(HdrBracketAccuracy, IrradianceAndDominantLightAgainstTheHdrTruth) {
         world.render(0, shorter, ignored, evs.back());
         images.push_back(std::move(shorter));
       }
-      std::vector<ibl::BracketFrame> frames;
-      for (size_t i = 0; i < images.size(); ++i) frames.push_back({&images[i], evs[i]});
-      const ibl::HdrMergeResult merged = ibl::mergeBracket(frames, merge);
-      long still_clipped = 0;
-      for (const std::uint8_t flag : merged.still_clipped) still_clipped += flag;
+      // Merged as `analyze` and `run` merge (direction by direction, each
+      // frame through its pose: the same pose here, the camera is still).
+      std::vector<ibl::BracketView> frames;
+      for (size_t i = 0; i < images.size(); ++i) frames.push_back({&images[i], evs[i], ball});
+      std::vector<std::uint8_t> clipped_texels;
 
       ibl::ProbeToCubeParams params;
       params.face_size = 64;
       params.probe_reflectance = scene.rig.probe_reflectance;
       const ibl::CubeMapRGB ldr_cube = ibl::probeImageToCubeMap(ball, reference, params);
       params.samples_per_axis = 4;
-      const ibl::CubeMapRGB hdr_cube = ibl::probeRadianceToCubeMap(ball, merged.linear, params);
+      const ibl::CubeMapRGB hdr_cube = ibl::bracketToCubeMap(frames, merge, params, &clipped_texels);
+      long still_clipped = 0;
+      for (const std::uint8_t flag : clipped_texels) still_clipped += flag;
 
       // The white border, read from the EV 0 frame.
       const AprilTagFamilyHandle family = createAprilTagFamily(scene.rig.tag_family);
@@ -260,7 +262,7 @@ TEST(HdrBracketAccuracy, IrradianceAndDominantLightAgainstTheHdrTruth) {
       std::string ev_list;
       for (const double ev : evs) ev_list += (ev_list.empty() ? "" : ", ") + std::to_string(static_cast<int>(ev));
       const std::string short_name = environment.substr(environment.find_last_of('/') + 1);
-      std::printf("| %s | %s%s | %s | %ld px | %.1f%% / %.1f%% / %.1f%% | %.1f%% / %.1f%% / %.1f%% | %.1f° / %.1f° | %s %.0f%% of the ball's E, blind share %.2f |\n",
+      std::printf("| %s | %s%s | %s | %ld texels | %.1f%% / %.1f%% / %.1f%% | %.1f%% / %.1f%% / %.1f%% | %.1f° / %.1f° | %s %.0f%% of the ball's E, blind share %.2f |\n",
                   short_name.c_str(), view.name, in_blind_spot ? " (light in the blind spot)" : "", ev_list.c_str(),
                   still_clipped, 100.0 * bracket_error, 100.0 * white_error, 100.0 * ldr_error, 100.0 * shading_error[0],
                   100.0 * shading_error[1], 100.0 * shading_error[2], bracket_deg, ldr_deg, ibl::toString(white.status),

@@ -544,19 +544,20 @@ TEST_F(AnalyzeBracket, MergedBracketMatchesTheHdrTruthAndBadFramesAreLeftOut) {
     return black;
   }());
   // All white (the ball clipped everywhere), a file that is not an image,
-  // and a shorter exposure from another camera position (the orbit's 20th
-  // frame: the ball has moved many pixels).
+  // a shorter exposure from a camera that moved a little (the orbit's 20th
+  // frame: the ball 2.7 px away; merged through its own pose) and one from
+  // far along the orbit (the ball further than its radius: refused).
   writeRgb("white.png", [&] {
     ImageRGB8 white = frame;
     std::fill(white.pixels.begin(), white.pixels.end(), 255);
     return white;
   }());
   std::ofstream(dir_ / "notes.png") << "not a picture\n";
-  {
+  for (const auto& [name, index] : {std::pair<const char*, int>{"moved.png", 20}, {"far.png", 150}}) {
     ImageRGB8 moved;
     FrameTruth ignored;
-    world.render(20, moved, ignored, -3.0);
-    writeRgb("moved.png", moved);
+    world.render(static_cast<std::uint64_t>(index), moved, ignored, -3.0);
+    writeRgb(name, moved);
   }
   args += " --bracket " + (dir_ / "nowhere.png").string() + "@-4";
   args += " --bracket " + (dir_ / "under3.png").string() + "@-5";
@@ -564,6 +565,7 @@ TEST_F(AnalyzeBracket, MergedBracketMatchesTheHdrTruthAndBadFramesAreLeftOut) {
   args += " --bracket " + (dir_ / "white.png").string() + "@-1";
   args += " --bracket " + (dir_ / "notes.png").string() + "@-2";
   args += " --bracket " + (dir_ / "moved.png").string() + "@-3";
+  args += " --bracket " + (dir_ / "far.png").string() + "@-3";
   const CommandResult result = run(args);
   ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
   const nlohmann::json analysis = readAnalysis();
@@ -582,16 +584,17 @@ TEST_F(AnalyzeBracket, MergedBracketMatchesTheHdrTruthAndBadFramesAreLeftOut) {
               std::to_string(f["ev"].get<int>())] = f["reason"].get<std::string>();
     }
   }
-  EXPECT_EQ(used, 4);
+  EXPECT_EQ(used, 5) << analysis["hdr"]["frames"].dump(1);
   EXPECT_NE(reasons["nowhere.png@-4"].find("no such file"), std::string::npos);
   EXPECT_NE(reasons["under3.png@-5"].find("its pixels say EV -3"), std::string::npos) << reasons["under3.png@-5"];
   EXPECT_NE(reasons["black.png@-15"].find("black"), std::string::npos);
   EXPECT_NE(reasons["white.png@-1"].find("clipped everywhere"), std::string::npos) << reasons["white.png@-1"];
   EXPECT_NE(reasons["notes.png@-2"].find("not a readable image"), std::string::npos) << reasons["notes.png@-2"];
-  EXPECT_NE(reasons["moved.png@-3"].find("the camera moved"), std::string::npos) << reasons["moved.png@-3"];
+  EXPECT_TRUE(reasons.find("moved.png@-3") == reasons.end()) << reasons["moved.png@-3"];
+  EXPECT_NE(reasons["far.png@-3"].find("the camera moved too far"), std::string::npos) << analysis["hdr"]["frames"].dump(1);
   // One warning line per frame left out.
   EXPECT_EQ(testing::countOccurrences(result.stderr_text, "left out:"), 6u) << result.stderr_text;
-  EXPECT_EQ(analysis["hdr"]["still_clipped_ball_px"], 0);
+  EXPECT_EQ(analysis["hdr"]["still_clipped_sr"].get<double>(), 0.0);
 
   double hdr_error = 0.0, ldr_error = 0.0;
   ASSERT_EQ(analysis["irradiance"].size(), 14u);
