@@ -81,3 +81,85 @@ TEST(ProbeToCube, EmptyImageGivesABlackCube) {
 
 }  // namespace
 }  // namespace probelight::ibl
+
+namespace probelight::ibl {
+namespace {
+
+// A room whose radiance runs over four decades: a smooth sky (0.05-0.45)
+// and a lamp (radiance 40) in a 12 deg cap, which an 8-bit frame clips.
+glm::dvec3 brightRoom(const glm::dvec3& w) {
+  const double sky = 0.25 + 0.2 * w.z;
+  const glm::dvec3 lamp_direction = glm::normalize(glm::dvec3(0.2, -0.9, 0.4));  // toward the camera's side: well seen
+  return glm::dvec3(glm::dot(w, lamp_direction) > std::cos(glm::radians(12.0)) ? 40.0 : sky);
+}
+
+// The ball at `ev` stops, as an 8-bit sRGB camera takes it.
+ImageRGB8 exposeBall(const MirrorBallView& view, double ev) {
+  ImageRGB8 image;
+  image.resize(view.camera.width_px, view.camera.height_px);
+  for (int v = 0; v < image.height; ++v)
+    for (int u = 0; u < image.width; ++u) {
+      const auto direction = pixelToReflectedDirection(view, {u, v});
+      if (!direction) continue;
+      const glm::dvec3 radiance = brightRoom(*direction) * std::exp2(ev);
+      for (int c = 0; c < 3; ++c)
+        image.row(v)[3 * u + c] = static_cast<std::uint8_t>(std::lround(255.0 * linearToSrgb(std::min(1.0, radiance[c]))));
+    }
+  return image;
+}
+
+// Frames taken from two places (the camera moved 6 px between the first
+// and the others): merged through each frame's own view, every direction
+// the ball shows well is the room's radiance within the codes' rounding,
+// the lamp included; merged as if nothing had moved, the lamp's edges are
+// wrong by a large factor.
+TEST(ProbeToCube, ABracketFromAMovingCameraIsMergedThroughEachFramesPose) {
+  const MirrorBallView first = testing::kioskBallView(0.40, {400.0, 200.0});
+  const MirrorBallView moved = testing::kioskBallView(0.40, {406.0, 200.0});
+  const std::vector<double> evs = {0.0, -3.0, -6.0, -9.0};
+  std::vector<ImageRGB8> images;
+  for (std::size_t i = 0; i < evs.size(); ++i) images.push_back(exposeBall(i == 0 ? first : moved, evs[i]));
+  ProbeToCubeParams params;
+  params.face_size = 32;
+  params.samples_per_axis = 1;  // texel centres, compared with the room there
+  auto merge = [&](bool registered) {
+    std::vector<BracketView> frames;
+    for (std::size_t i = 0; i < evs.size(); ++i)
+      frames.push_back({&images[i], evs[i], (i == 0 || !registered) ? first : moved});
+    std::vector<std::uint8_t> still_clipped;
+    CubeMapRGB cube = bracketToCubeMap(frames, HdrMergeSettings{}, params, &still_clipped);
+    long flagged = 0;
+    for (const std::uint8_t flag : still_clipped) flagged += flag;
+    EXPECT_EQ(flagged, 0) << "the lamp is measured at EV -6 and -9";
+    return cube;
+  };
+  const CubeMapRGB registered = merge(true), unregistered = merge(false);
+  const glm::dvec3 away_from_camera = glm::normalize(first.center_w - first.pose.cameraCenterWorld());
+  double worst_registered = 0.0, worst_unregistered = 0.0;
+  int lamp_texels = 0;
+  for (int face = 0; face < kCubeFaceCount; ++face)
+    for (int y = 0; y < params.face_size; ++y)
+      for (int x = 0; x < params.face_size; ++x) {
+        const glm::dvec3 w = cubeTexelCenterDirection(face, x, y, params.face_size);
+        // The ball's inner part in both views (near the rim a pixel spans
+        // many degrees), and away from the lamp's edge by more than a
+        // pixel's worth of direction there (~2 deg).
+        if (testing::angleBetweenRad(w, away_from_camera) < glm::radians(60.0)) continue;
+        const glm::dvec3 lamp_direction = glm::normalize(glm::dvec3(0.2, -0.9, 0.4));
+        const double from_lamp_edge = std::abs(glm::degrees(testing::angleBetweenRad(w, lamp_direction)) - 12.0);
+        if (from_lamp_edge < 3.0) continue;
+        const double truth = brightRoom(w).g;
+        lamp_texels += truth > 1.0 ? 1 : 0;
+        worst_registered = std::max(worst_registered, std::abs(registered.texel(face, x, y).g / truth - 1.0));
+        worst_unregistered = std::max(worst_unregistered, std::abs(unregistered.texel(face, x, y).g / truth - 1.0));
+      }
+  ASSERT_GT(lamp_texels, 5);
+  // Half a code of rounding in the frame that measured it: at most ~1.5%
+  // for codes above 60 (sRGB's slope), and the merge takes the best
+  // exposed; bilinear reads of a smooth sky add far less.
+  EXPECT_LT(worst_registered, 0.03);
+  EXPECT_GT(worst_unregistered, 0.5) << "6 px of motion must show when it is not undone";
+}
+
+}  // namespace
+}  // namespace probelight::ibl
