@@ -154,6 +154,8 @@ TEST(ProbeToCube, ABracketFromAMovingCameraIsMergedThroughEachFramesPose) {
         worst_unregistered = std::max(worst_unregistered, std::abs(unregistered.texel(face, x, y).g / truth - 1.0));
       }
   ASSERT_GT(lamp_texels, 5);
+  std::cout << "[ probe ] bracket from a moving camera: worst relative error " << worst_registered << " registered, "
+            << worst_unregistered << " not, over " << lamp_texels << " lamp texels and the sky\n";
   // Half a code of rounding in the frame that measured it: at most ~1.5%
   // for codes above 60 (sRGB's slope), and the merge takes the best
   // exposed; bilinear reads of a smooth sky add far less.
