@@ -131,18 +131,6 @@ CubeMapRGB sampleCube(const MirrorBallView& view, const ProbeToCubeParams& param
   return cube;
 }
 
-// Each frame's pixels as linear light, and how much each is worth: the
-// merge's hat weight times the frame's exposure ratio (0 where the code is
-// clipped or lost in the noise).
-struct WeightedFrame {
-  const BracketView* frame;
-  double ratio;
-  std::vector<glm::vec3> linear;  // decoded / ratio: the reference exposure's units
-  std::vector<glm::vec3> weight;
-  std::vector<std::uint8_t> clipped;  // some channel at or above the clip
-  std::vector<std::uint8_t> clipped_channel;  // bit c: channel c at or above the clip
-};
-
 }  // namespace
 
 CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMergeSettings& merge,
@@ -150,34 +138,29 @@ CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMer
   if (frames.empty() || !frames.front().image || frames.front().image->empty()) return CubeMapRGB(params.face_size);
   std::array<double, 256> decoded{};
   for (int code = 0; code < 256; ++code) decoded[static_cast<std::size_t>(code)] = decodeCameraValue(merge.camera_transfer, code / 255.0);
-  std::vector<WeightedFrame> weighted;
+  // Per frame only its exposure ratio: the pixels a sample reads are
+  // decoded and weighted as it reads them (a few per direction), not the
+  // whole frame.
+  std::vector<double> ratios;
   std::size_t shortest = 0, longest = 0;
-  for (const BracketView& frame : frames) {
-    WeightedFrame w{&frame, std::exp2(frame.ev), {}, {}, {}, {}};
-    const std::size_t count = static_cast<std::size_t>(frame.image->width) * frame.image->height;
-    w.linear.resize(count);
-    w.weight.resize(count);
-    w.clipped.resize(count);
-    w.clipped_channel.resize(count);
-    for (std::size_t i = 0; i < count; ++i)
-      for (int c = 0; c < 3; ++c) {
-        const int code = frame.image->pixels[3 * i + static_cast<std::size_t>(c)];
-        w.linear[i][c] = static_cast<float>(decoded[static_cast<std::size_t>(code)] / w.ratio);
-        const int hat = (code <= merge.dark_code || code >= merge.clip_code)
-                            ? 0
-                            : std::min(code - merge.dark_code, merge.clip_code - code);
-        w.weight[i][c] = static_cast<float>(hat * w.ratio);
-        if (code >= merge.clip_code) {
-          w.clipped[i] = 1;
-          w.clipped_channel[i] |= static_cast<std::uint8_t>(1u << c);
-        }
-      }
-    weighted.push_back(std::move(w));
-  }
   for (std::size_t f = 0; f < frames.size(); ++f) {
+    ratios.push_back(std::exp2(frames[f].ev));
     if (frames[f].ev < frames[shortest].ev) shortest = f;
     if (frames[f].ev > frames[longest].ev) longest = f;
   }
+  auto codeAt = [&](std::size_t f, int index, int c) {
+    return static_cast<int>(frames[f].image->pixels[3 * static_cast<std::size_t>(index) + static_cast<std::size_t>(c)]);
+  };
+  auto linearAt = [&](std::size_t f, int index, int c) { return decoded[static_cast<std::size_t>(codeAt(f, index, c))] / ratios[f]; };
+  auto hatAt = [&](std::size_t f, int index, int c) {
+    const int code = codeAt(f, index, c);
+    const int hat = (code <= merge.dark_code || code >= merge.clip_code) ? 0 : std::min(code - merge.dark_code, merge.clip_code - code);
+    return hat * ratios[f];
+  };
+  auto clippedAt = [&](std::size_t f, int index, int c) { return codeAt(f, index, c) >= merge.clip_code; };
+  auto anyClippedAt = [&](std::size_t f, int index) {
+    return clippedAt(f, index, 0) || clippedAt(f, index, 1) || clippedAt(f, index, 2);
+  };
   // Bilinear over a frame's four pixels around `pixel`, of each pixel's
   // weighted value and weight (a clipped pixel adds nothing, instead of
   // pulling its neighbours' codes up as interpolated codes would).
@@ -205,7 +188,7 @@ CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMer
         glm::dvec3 sum(0.0), weight_sum(0.0);
         std::optional<Taps> at_shortest, at_longest;
         bool seen = false;
-        for (std::size_t f = 0; f < weighted.size(); ++f) {
+        for (std::size_t f = 0; f < frames.size(); ++f) {
           const auto pixel = reflectedDirectionToPixel(frames[f].view, direction_w, params.normal_iterations);
           if (!pixel) continue;
           seen = true;
@@ -217,10 +200,9 @@ CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMer
             bool measured = true;
             for (int k = 0; k < 4; ++k) {
               if (t.share[k] <= 0.0) continue;
-              const std::size_t i = static_cast<std::size_t>(t.index[k]);
-              measured = measured && !(weighted[f].clipped_channel[i] & (1u << c));
-              value += t.share[k] * weighted[f].linear[i][c];
-              weight += t.share[k] * weighted[f].weight[i][c];
+              measured = measured && !clippedAt(f, t.index[k], c);
+              value += t.share[k] * linearAt(f, t.index[k], c);
+              weight += t.share[k] * hatAt(f, t.index[k], c);
             }
             if (!measured || weight <= 0.0) continue;
             sum[c] += weight * value;
@@ -239,12 +221,11 @@ CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMer
           bool shortest_clipped = false;
           if (at_shortest)
             for (int k = 0; k < 4; ++k)
-              shortest_clipped = shortest_clipped ||
-                                 (at_shortest->share[k] > 0.0 && weighted[shortest].clipped[static_cast<std::size_t>(at_shortest->index[k])]);
+              shortest_clipped = shortest_clipped || (at_shortest->share[k] > 0.0 && anyClippedAt(shortest, at_shortest->index[k]));
           const bool use_shortest = at_shortest && (shortest_clipped || !at_longest);
           const Taps& t = use_shortest ? *at_shortest : *at_longest;
           const std::size_t f = use_shortest ? shortest : longest;
-          for (int k = 0; k < 4; ++k) value[c] += t.share[k] * weighted[f].linear[static_cast<std::size_t>(t.index[k])][c];
+          for (int k = 0; k < 4; ++k) value[c] += t.share[k] * linearAt(f, t.index[k], c);
           if (use_shortest && shortest_clipped) lower_bound = true;
         }
         return value;
