@@ -26,7 +26,11 @@ void encodeSimFrame(const ImageRGB8& rgb, PixelLayout layout, FrameBuffer& frame
 
 SimFrameSource::SimFrameSource(std::shared_ptr<const sim::World> world, std::uint64_t frame_count, int pool_size,
                                SimCameraOptions options)
-    : ThreadedFrameSource(pool_size), world_(std::move(world)), frame_count_(frame_count), options_(options) {}
+    : ThreadedFrameSource(pool_size),
+      world_(std::move(world)),
+      frame_count_(frame_count),
+      options_(options),
+      pool_size_(pool_size) {}
 
 bool SimFrameSource::lockExposure(bool locked) {
   (void)locked;
@@ -35,8 +39,26 @@ bool SimFrameSource::lockExposure(bool locked) {
 
 bool SimFrameSource::setManualExposure(const std::optional<ManualExposure>& exposure) {
   std::lock_guard<std::mutex> lock(exposure_mutex_);
-  manual_exposure_ = exposure;
+  // The consumer holds the newest frame; the pool's other buffers may hold
+  // the next ones already made. From newest + pool size on, none is.
+  // Changes every frame still to come is past need only the newest of
+  // them kept (an endless run recalibrates again and again).
+  std::size_t first_needed = 0;
+  for (std::size_t i = 0; i < exposure_changes_.size(); ++i)
+    if (exposure_changes_[i].first <= newest_handed_out_) first_needed = i;
+  exposure_changes_.erase(exposure_changes_.begin(),
+                          exposure_changes_.begin() + static_cast<std::ptrdiff_t>(first_needed));
+  exposure_changes_.emplace_back(newest_handed_out_ + static_cast<std::uint64_t>(pool_size_), exposure);
   return true;
+}
+
+FrameWait SimFrameSource::waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) {
+  const FrameWait wait = ThreadedFrameSource::waitFrame(timeout, lease);
+  if (wait == FrameWait::kFrame) {
+    std::lock_guard<std::mutex> lock(exposure_mutex_);
+    newest_handed_out_ = lease->metadata.sequence;
+  }
+  return wait;
 }
 
 bool SimFrameSource::prepare(std::string& error) {
@@ -70,7 +92,9 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
   ManualExposure exposure{kSimExposureUs, 1.0};
   {
     std::lock_guard<std::mutex> lock(exposure_mutex_);
-    if (manual_exposure_) exposure = *manual_exposure_;
+    // The newest change that applies to this frame.
+    for (const auto& [from_index, change] : exposure_changes_)
+      if (from_index <= index) exposure = change ? *change : ManualExposure{kSimExposureUs, 1.0};
   }
   exposure.exposure_us = std::max(exposure.exposure_us, options_.min_exposure_us);
   const double exposure_ev = std::log2(exposure.exposure_us * exposure.analogue_gain / kSimExposureUs);

@@ -6,6 +6,8 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "capture/frame_source.hpp"
 #include "sim/world.hpp"
@@ -45,8 +47,13 @@ class SimFrameSource : public ThreadedFrameSource {
   bool lockExposure(bool locked) override;
   // The simulated sensor takes any exposure: frames are rendered
   // log2(exposure_us * gain / 10 ms) stops from the scene's exposure
-  // (sim::World::render's exposure_ev), and say so in their metadata.
+  // (sim::World::render's exposure_ev), and say so in their metadata. As a
+  // camera's pipeline does, a change applies from a fixed number of frames
+  // after the newest one handed out (the pool's size: no frame from there
+  // on has been made yet), so a simulated run stays the same frame for
+  // frame however the threads are scheduled.
   bool setManualExposure(const std::optional<ManualExposure>& exposure) override;
+  FrameWait waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) override;
 
  protected:
   bool prepare(std::string& error) override;
@@ -61,7 +68,10 @@ class SimFrameSource : public ThreadedFrameSource {
   int restarts_failed_ = 0;
   ImageRGB8 rendered_;      // YUV layouts: the picture before encoding
   std::mutex exposure_mutex_;  // set on the render thread, read on the producer's
-  std::optional<ManualExposure> manual_exposure_;
+  // Exposure changes: from which frame index each applies.
+  std::vector<std::pair<std::uint64_t, std::optional<ManualExposure>>> exposure_changes_;
+  std::uint64_t newest_handed_out_ = 0;
+  int pool_size_ = 3;
 };
 
 }  // namespace probelight
