@@ -528,9 +528,7 @@ class Analyzer {
   // Texels at or above this clipped in the camera (the merge's clip code,
   // through the ball's reflectance).
   double clipLevel() const {
-    const ibl::HdrMergeSettings merge;
-    return ibl::decodeCameraValue(settings_.maps.stages.camera_transfer, merge.clip_code / 255.0) /
-           rig_.probe_reflectance;
+    return ibl::clippedMapLevel(ibl::HdrMergeSettings{settings_.maps.stages.camera_transfer}, rig_.probe_reflectance);
   }
 
   // A bracket or the white border gave light beyond the 8-bit map: the

@@ -887,9 +887,8 @@ class Kiosk {
   // Texels at or above this clipped in the camera (the merge's clip code,
   // through the ball's reflectance).
   double clipLevel() const {
-    const ibl::HdrMergeSettings merge;
-    return ibl::decodeCameraValue(inputs_.settings.maps.stages.camera_transfer, merge.clip_code / 255.0) /
-           inputs_.rig.probe_reflectance;
+    return ibl::clippedMapLevel(ibl::HdrMergeSettings{inputs_.settings.maps.stages.camera_transfer},
+                                inputs_.rig.probe_reflectance);
   }
 
   // The frame as 8-bit R'G'B' (decoded from Y'CbCr where it is YUV).

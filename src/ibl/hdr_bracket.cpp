@@ -21,6 +21,10 @@ double hatWeight(int code, const HdrMergeSettings& settings) {
 
 }  // namespace
 
+double clippedMapLevel(const HdrMergeSettings& settings, double probe_reflectance) {
+  return decodeCameraValue(settings.camera_transfer, settings.clip_code / 255.0) / probe_reflectance;
+}
+
 std::string bracketProblem(const std::vector<BracketFrame>& frames) {
   if (frames.empty()) return "an exposure bracket needs at least one frame";
   const ImageRGB8* first = frames.front().image;

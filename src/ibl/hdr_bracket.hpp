@@ -40,6 +40,10 @@ struct HdrMergeResult {
   std::vector<std::uint8_t> still_clipped;
 };
 
+// A reflection map's texels at or above this (largest channel) clipped in
+// the camera: settings.clip_code decoded, divided by the ball's reflectance.
+double clippedMapLevel(const HdrMergeSettings& settings, double probe_reflectance);
+
 // Why a bracket cannot be merged (frames of other sizes, none given), or
 // empty. Checked by mergeBracket too.
 std::string bracketProblem(const std::vector<BracketFrame>& frames);

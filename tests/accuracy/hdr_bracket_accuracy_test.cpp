@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "app/analyze.hpp"
 #include "ibl/hdr_bracket.hpp"
 #include "ibl/irradiance.hpp"
 #include "ibl/light_dome.hpp"
@@ -35,14 +36,6 @@ namespace probelight {
 namespace {
 
 double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
-
-std::vector<glm::dvec3> fourteenNormals() {
-  std::vector<glm::dvec3> normals = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (int x : {1, -1})
-    for (int y : {1, -1})
-      for (int z : {1, -1}) normals.push_back(glm::normalize(glm::dvec3(x, y, z)));
-  return normals;
-}
 
 // Evenly spread directions (Fibonacci sphere), each standing for the same
 // solid angle.
@@ -216,7 +209,7 @@ TEST(HdrBracketAccuracy, IrradianceAndDominantLightAgainstTheHdrTruth) {
           white_cube, nullptr, border, scene.rig.tag_white_albedo, clip_level, &clipped_mask);
 
       double bracket_error = 0.0, ldr_error = 0.0, white_error = 0.0;
-      for (const glm::dvec3& normal : fourteenNormals()) {
+      for (const glm::dvec3& normal : analysisNormals()) {
         const double expected = luminance(world.irradiance(normal, 0).hdr);
         bracket_error += std::abs(luminance(ibl::irradianceFromCubeMap(hdr_cube, normal)) - expected) / expected / 14.0;
         white_error += std::abs(luminance(ibl::irradianceFromCubeMap(white_cube, normal)) - expected) / expected / 14.0;
