@@ -195,6 +195,7 @@ AppSettings loadAppSettings(const std::string& path) {
       sim.readInt("camera_lost_restarts", settings.sim.camera_lost_restarts, Range::closed(0, 1000));
   settings.sim.min_exposure_us =
       sim.readDouble("min_exposure_us", settings.sim.min_exposure_us, Range::closed(0.0, 1e6));
+  settings.sim.min_exposure_reported = sim.readBool("min_exposure_reported", settings.sim.min_exposure_reported);
   sim.rejectUnknownFields();
 
   ConfigReader output = file.section("output");

@@ -116,6 +116,10 @@ struct SimConfig {
   // The shortest exposure the simulated sensor can take (microseconds; 0: any),
   // as real sensors have one: a bracket asking for less gets this.
   double min_exposure_us = 0.0;
+  // Whether the simulated camera says that shortest exposure (a camera's
+  // ExposureTime control has a minimum; a source may not tell it), so that
+  // a bracket plans its ladder to it rather than finding it.
+  bool min_exposure_reported = true;
 };
 
 struct ButtonConfig {

@@ -5,7 +5,6 @@
 #include <sstream>
 
 #include "ibl/probe_to_cube.hpp"
-#include "tracking/tag_tracker.hpp"
 
 namespace probelight {
 namespace {
@@ -55,14 +54,13 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
   std::vector<const BracketCandidate*> accepted;
   std::vector<ibl::MirrorBallView> accepted_views;
   ibl::MirrorBallView last_view = setup.view;  // the pose of the frame before
-  // One tracker for all: seeded with the reference frame, it then searches
-  // only a window around the tag (a still camera finds it there at once).
-  tracking::TagTracker tracker(setup.detector, setup.rig, setup.view.camera);
-  {
-    std::vector<std::uint8_t> luma;
-    lumaFromRgb(reference, luma);
-    tracker.track(luma.data(), reference.width, reference.height, reference.width);
-  }
+  // One tracker for all, seeded with the reference frame's pose: it
+  // searches only a window around the tag (a still camera finds it there at
+  // once), and the whole frame only where the window does not show it.
+  std::optional<tracking::TagTracker> own_tracker;
+  if (!setup.tracker) own_tracker.emplace(setup.detector, setup.rig, setup.view.camera);
+  tracking::TagTracker& tracker = setup.tracker ? *setup.tracker : *own_tracker;
+  tracker.seed(setup.view.pose);
   const ImageRGB8* previous = &reference;
   double previous_ev = 0.0;
   for (const BracketCandidate& candidate : candidates) {

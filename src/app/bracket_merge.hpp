@@ -16,6 +16,7 @@
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
 #include "tracking/tag_detector.hpp"
+#include "tracking/tag_tracker.hpp"
 
 namespace probelight {
 
@@ -67,6 +68,11 @@ struct BracketSetup {
   // takes a bracket); false, the reference's (files said to show the same
   // view, in no known order).
   bool untracked_take_previous_pose = false;
+  // A tracker of this rig and camera to follow the tag through the frames
+  // (it is seeded with the reference's pose); null: one is made (building a
+  // tag family's decode tables costs tens of milliseconds, so a kiosk keeps
+  // one for all its brackets).
+  tracking::TagTracker* tracker = nullptr;
 };
 
 struct BracketMergeResult {

@@ -260,6 +260,8 @@ class Kiosk {
     try {
       tracker_ = std::make_unique<tracking::TagTracker>(tagDetectorSettings(settings, inputs_.rig), inputs_.rig,
                                                         inputs_.camera);
+      bracket_tracker_ = std::make_unique<tracking::TagTracker>(tagDetectorSettings(settings, inputs_.rig),
+                                                                inputs_.rig, inputs_.camera);
       smoother_ = std::make_unique<tracking::PoseSmoother>(settings.tracking.smoothing, inputs_.camera,
                                                            tracking::smoothingReferencePoints(inputs_.rig));
     } catch (const std::invalid_argument& bad_setting) {
@@ -342,6 +344,7 @@ class Kiosk {
     camera_options.lost_at_frame = settings.sim.camera_lost_at_frame;
     camera_options.failed_restarts = settings.sim.camera_lost_restarts;
     camera_options.min_exposure_us = settings.sim.min_exposure_us;
+    camera_options.min_exposure_reported = settings.sim.min_exposure_reported;
     source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), 3, camera_options);
     return 0;
   }
@@ -908,32 +911,42 @@ class Kiosk {
   }
 
   // lights.bracket_*: at a fit whose frame shows the ball clipped, shorter
-  // exposures are taken, bracket_step_stops apart, while the ball still
-  // clips and down to bracket_max_stops, and merged with the frame into an
-  // HDR map (app/bracket_merge.hpp). Bracket frames are not shown: the last
-  // frame stays, with a status line.
+  // exposures are taken, bracket_step_stops apart down to bracket_max_stops
+  // (or the sensor's shortest exposure), while the ball still clips, and
+  // merged with the frame into an HDR map (app/bracket_merge.hpp). The whole
+  // ladder is asked for at once: the camera takes it one rung a frame, so
+  // its latency is paid once, and the bracket ends at the first frame whose
+  // ball no longer clips (the rungs after it are dropped or not looked at).
+  // Bracket frames are not shown: the last frame stays, with a status line.
   struct PendingBracket {
     ImageRGB8 reference;
     ibl::MirrorBallView view;
     ibl::ProbeOutline outline;
     FrameSource::ManualExposure base;  // the reference frame's exposure
     bool exposure_locked = false;      // ... and whether AE was locked for it
-    double requested_ev = 0.0;
-    int frames_waited = 0;
+    std::vector<double> ladder_ev;     // the rungs asked for, in stops from base
+    bool ladder_at_shortest = false;   // its last rung is the sensor's shortest exposure
+    int frames_waited = 0;             // since the request, or since the last frame kept
     std::vector<BracketCandidate> frames;
     std::uint64_t started_frame = 0;
     double started_s = 0.0;
+    double own_s = 0.0;  // probelight's own work on the bracket's frames (the rest of the wall time is the camera's)
   };
   // A requested exposure shows in a frame's metadata within a few frames
   // (libcamera queues a handful of requests ahead, and sensors apply
   // exposure changes two frames late); past this the bracket ends with what
   // it has.
   static constexpr int kBracketMaxWaitFrames = 8;
-  // A frame counts as the requested exposure within this many stops of it
-  // (sensors round exposure time to whole lines).
+  // A frame counts as a rung within this many stops of it (sensors round
+  // exposure time to whole lines).
   static constexpr double kBracketEvMatchStops = 0.25;
-  // Frames after a request before a shorter-than-asked frame is taken as
-  // the sensor's limit rather than one still in flight.
+  // A bracket frame is kept when it is at least this much shorter than the
+  // last one kept: it shows something the others clipped. (A frame caught
+  // between rungs, where a sensor applies gain a frame before exposure time,
+  // is kept too: its metadata says the exposure it had.)
+  static constexpr double kBracketNewFrameStops = 2.0 * kBracketEvMatchStops;
+  // Once the ladder's frames have begun they come one a frame: this many
+  // frames with none shorter is a sensor that went no shorter than it said.
   static constexpr int kBracketClampedAfterFrames = 3;
 
   // Shorter by `ev` stops: the gain comes down to 1 first (any sensor takes
@@ -942,6 +955,32 @@ class Kiosk {
   static FrameSource::ManualExposure exposureAt(const FrameSource::ManualExposure& base, double ev) {
     const double gain = std::min(base.analogue_gain, 1.0);
     return {base.exposure_us * base.analogue_gain / gain * std::exp2(ev), gain};
+  }
+
+  // The rungs -step, -2 step, ... down to -max_stops, the ones below the
+  // sensor's shortest exposure (where the source knows it) replaced by that
+  // one exposure, and that one left out when it is hardly shorter than the
+  // rung before it.
+  void planLadder(PendingBracket& bracket, std::vector<FrameSource::ManualExposure>& exposures) const {
+    const LightsConfig& config = inputs_.settings.lights;
+    const std::optional<double> shortest_us = source_->shortestExposureUs();
+    for (double ev = -config.bracket_step_stops; ev >= -config.bracket_max_stops - 1e-9; ev -= config.bracket_step_stops) {
+      FrameSource::ManualExposure exposure = exposureAt(bracket.base, ev);
+      if (shortest_us && exposure.exposure_us < *shortest_us) {
+        exposure.exposure_us = *shortest_us;
+        const double shortest_ev = std::log2(exposure.exposure_us * exposure.analogue_gain /
+                                             (bracket.base.exposure_us * bracket.base.analogue_gain));
+        const double previous_ev = bracket.ladder_ev.empty() ? 0.0 : bracket.ladder_ev.back();
+        if (shortest_ev <= previous_ev - kBracketNewFrameStops) {
+          bracket.ladder_ev.push_back(shortest_ev);
+          exposures.push_back(exposure);
+        }
+        bracket.ladder_at_shortest = true;
+        break;
+      }
+      bracket.ladder_ev.push_back(ev);
+      exposures.push_back(exposure);
+    }
   }
 
   bool startBracket(const FrameBuffer& frame, std::uint64_t frame_number, const ibl::MirrorBallView& view,
@@ -953,14 +992,20 @@ class Kiosk {
       return false;
     }
     const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
-    PendingBracket bracket{frameRgb(frame), view, outline, {}, exposure_locked_, -config.bracket_step_stops, 0, {},
+    PendingBracket bracket{frameRgb(frame), view, outline, {}, exposure_locked_, {}, false, 0, {},
                            frame_number, monotonicNowS()};
     if (ballPixelCodes(bracket.reference, outline, merge).clipped == 0) {
       report_.count("brackets_not_needed");  // nothing clipped: the 8-bit map holds all the light
       return false;
     }
     bracket.base = {frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0};
-    if (!source_->setManualExposure(exposureAt(bracket.base, bracket.requested_ev))) {
+    std::vector<FrameSource::ManualExposure> exposures;
+    planLadder(bracket, exposures);
+    if (exposures.empty()) {
+      report_.count("brackets_at_shortest_exposure");  // the frame was already as short as the sensor goes
+      return false;
+    }
+    if (!source_->setExposureLadder(exposures)) {
       report_.count("brackets_unsupported");
       return false;
     }
@@ -978,7 +1023,15 @@ class Kiosk {
     report_.recordStageSkip(diffuseStageName(), "exposure_bracket");
     ++map_skip_reasons_["exposure_bracket"];
     tag_status_frames_["exposure_bracket"] += 1;  // not looked for
-    return renderAndPresent(last_track_, status, frame_number, false);
+    // The display's frame already holds the kept frame with this status
+    // (nothing was drawn since): it is shown again, not drawn again.
+    if (kept_frame_status_ == status) {
+      report_.recordStageSkip("render", "kept_frame_unchanged");
+      return presentFrame(status, frame_number, false);
+    }
+    if (const int failed = renderAndPresent(last_track_, status, frame_number, false); failed != 0) return failed;
+    kept_frame_status_ = status;
+    return 0;
   }
 
   // Stops of a frame's exposure from `base` (NaN when it does not say).
@@ -1001,42 +1054,38 @@ class Kiosk {
 
   int bracketFrame(const FrameBuffer& frame, std::uint64_t frame_number) {
     PendingBracket& bracket = *bracket_;
-    const LightsConfig& config = inputs_.settings.lights;
+    const double entered_s = monotonicNowS();
     const double ev = stopsFrom(frame, bracket.base);
-    bool done = false;
     const double last_ev = bracket.frames.empty() ? 0.0 : bracket.frames.back().ev;
-    // A sensor that cannot expose as short as asked delivers its shortest:
-    // a frame, some frames after the request, clearly shorter than the last
-    // one is that. It is kept (its EV is its metadata's), and the bracket
-    // ends there: asking for less would give the same again.
-    const bool clamped = std::isfinite(ev) && bracket.frames_waited >= kBracketClampedAfterFrames &&
-                         ev < last_ev - 2.0 * kBracketEvMatchStops &&
-                         std::abs(ev - bracket.requested_ev) > kBracketEvMatchStops;
-    if (clamped) report_.count("bracket_exposures_clamped");
-    if (std::isfinite(ev) && (std::abs(ev - bracket.requested_ev) <= kBracketEvMatchStops || clamped)) {
+    bool done = false;
+    if (std::isfinite(ev) && ev <= last_ev - kBracketNewFrameStops) {
       BracketCandidate candidate{"camera frame " + std::to_string(frame_number), ev, frameRgb(frame)};
       const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
       const bool still_clips = ballPixelCodes(candidate.rgb, bracket.outline, merge).clipped > 0;
       bracket.frames.push_back(std::move(candidate));
       bracket.frames_waited = 0;
       report_.count("bracket_frames");
-      if (still_clips && !clamped &&
-          bracket.requested_ev - config.bracket_step_stops >= -config.bracket_max_stops - 1e-9) {
-        bracket.requested_ev -= config.bracket_step_stops;
-        source_->setManualExposure(exposureAt(bracket.base, bracket.requested_ev));
-      } else {
+      const bool ladder_done = ev <= bracket.ladder_ev.back() + kBracketEvMatchStops;
+      // The sensor's shortest exposure and the ball still clips: asking for
+      // less would give the same again.
+      if (still_clips && ladder_done && bracket.ladder_at_shortest) report_.count("bracket_exposures_clamped");
+      done = !still_clips || ladder_done;
+    } else if (!bracket.frames.empty()) {
+      if (++bracket.frames_waited >= kBracketClampedAfterFrames) {
+        report_.count("bracket_exposures_clamped");  // a limit the source did not tell
         done = true;
       }
     } else if (++bracket.frames_waited > kBracketMaxWaitFrames) {
       report_.count("bracket_exposures_not_delivered");
       log_ << logPrefix(LogPriority::kWarning) << "probelight: frame " << frame_number << ": the camera did not deliver EV "
-           << std::fixed << std::setprecision(1) << bracket.requested_ev << " in " << kBracketMaxWaitFrames
-           << " frames; the bracket ends with " << bracket.frames.size() << " frame(s)\n";
+           << std::fixed << std::setprecision(1) << bracket.ladder_ev.front() << " in " << kBracketMaxWaitFrames
+           << " frames; the bracket ends with no frame\n";
       done = true;
     }
-    std::ostringstream status;
-    status << "Recalibrating lights: exposure bracket, EV " << std::fixed << std::setprecision(0) << bracket.requested_ev;
-    if (const int failed = showKeptFrame(frame_number, status.str()); failed != 0) return failed;
+    // One status for the whole bracket, so that the kept frame is drawn once.
+    if (const int failed = showKeptFrame(frame_number, "Recalibrating lights: exposure bracket"); failed != 0)
+      return failed;
+    bracket.own_s += monotonicNowS() - entered_s;
     return done ? finishBracket(frame_number) : 0;
   }
 
@@ -1045,15 +1094,16 @@ class Kiosk {
   int finishBracket(std::uint64_t frame_number) {
     PendingBracket bracket = std::move(*bracket_);
     bracket_.reset();
-    source_->setManualExposure(std::nullopt);
+    source_->setExposureLadder({});
     settling_ = Settling{bracket.base, 0};
     const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
     // The camera took them in order: a frame too dark to show the tag was
     // taken right after the one before it.
     const BracketSetup setup{bracket.view, bracket.outline, inputs_.rig,
                              tagDetectorSettings(inputs_.settings, inputs_.rig), merge,
-                             maps_.reflection().face_size, true};
+                             maps_.reflection().face_size, true, bracket_tracker_.get()};
     BracketMergeResult merged;
+    const double merge_started_s = monotonicNowS();
     {
       StageTimer timer(report_, "bracket_merge");
       merged = mergeBracketProbe(bracket.reference, std::move(bracket.frames), setup,
@@ -1069,8 +1119,12 @@ class Kiosk {
                             {"frames", merged.frames},
                             {"still_clipped_sr", merged.still_clipped_sr},
                             {"camera_frames", frame_number - bracket.started_frame},
+                            {"ladder_ev", bracket.ladder_ev},
                             // From the fit frame to the merged map: the camera's frames plus the merge.
-                            {"wall_ms", 1000.0 * (monotonicNowS() - bracket.started_s)}};
+                            {"wall_ms", 1000.0 * (monotonicNowS() - bracket.started_s)},
+                            // Of that, probelight's own work: each bracket frame's checks and the kept
+                            // frame drawn again, then the merge. The rest is waiting for the camera.
+                            {"own_ms", 1000.0 * (bracket.own_s + monotonicNowS() - merge_started_s)}};
     FitInputs inputs;
     inputs.view = &bracket.view;
     const ImageRGB8& reference = bracket.reference;
@@ -1232,6 +1286,7 @@ class Kiosk {
                        bool log_status_change = true) {
     const CameraIntrinsics& camera = inputs_.camera;
     std::string error;
+    kept_frame_status_.reset();  // the display's frame is drawn anew
     {
       StageTimer timer(report_, "render");
       display_->beginFrame();
@@ -1250,6 +1305,13 @@ class Kiosk {
       }
       gpuDone();
     }
+    return presentFrame(status, frame_number, log_status_change);
+  }
+
+  // Shows the display's frame (drawn by renderAndPresent, now or for an
+  // earlier frame) as frame `frame_number`.
+  int presentFrame(const std::string& status, std::uint64_t frame_number, bool log_status_change) {
+    std::string error;
     if (!status.empty()) report_.count("frames_with_status");
     if (log_status_change && status != last_logged_status_ && !options_.quiet) {
       log_ << "probelight: frame " << frame_number << ": " << (status.empty() ? "tracking" : status) << "\n";
@@ -1382,6 +1444,7 @@ class Kiosk {
   pipeline::EnvironmentMaps maps_;
   pipeline::ObjectCompositor compositor_;
   std::unique_ptr<tracking::TagTracker> tracker_;
+  std::unique_ptr<tracking::TagTracker> bracket_tracker_;  // follows the tag through each bracket's frames
   std::unique_ptr<tracking::PoseSmoother> smoother_;
   pipeline::GroundShadow ground_shadow_;
   LightTransition light_transition_;
@@ -1434,6 +1497,10 @@ class Kiosk {
   double last_exposure_us_ = 0.0, last_analogue_gain_ = 0.0;
   nlohmann::json exposure_at_last_fit_;  // null until a fit
   std::optional<PendingBracket> bracket_;  // an exposure bracket being taken
+  // The status the display's frame was last drawn with as a kept frame
+  // (reset by every drawing): a kept frame with the same status is shown
+  // again without drawing it.
+  std::optional<std::string> kept_frame_status_;
   struct Settling {
     FrameSource::ManualExposure base;  // the exposure to come back to
     int frames_waited = 0;

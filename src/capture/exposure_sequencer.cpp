@@ -2,17 +2,19 @@
 
 namespace probelight {
 
-void ExposureSequencer::setManual(const std::optional<ExposureSetting>& exposure) {
-  if (exposure) {
+void ExposureSequencer::setManual(const std::vector<ExposureSetting>& ladder) {
+  if (!ladder.empty()) {
     // Entering (or moving within) a bracket. The exposure to come back to
     // is the last one seen before the bracket began.
-    if (!manual_ && !return_to_) return_to_ = last_seen_;
-    manual_ = exposure;
+    if (!in_bracket_ && !return_to_) return_to_ = last_seen_;
+    in_bracket_ = true;
+    pending_.assign(ladder.begin(), ladder.end());
     restored_ = false;
     return;
   }
-  if (!manual_) return;
-  manual_.reset();
+  if (!in_bracket_) return;
+  in_bracket_ = false;
+  pending_.clear();
   restored_ = !return_to_;  // nothing known to restore: straight to the lock state
 }
 
@@ -27,9 +29,13 @@ ExposureControls ExposureSequencer::nextRequest() {
     applied_setting_ = setting;
     return ExposureControls{kind, setting};
   };
-  if (manual_) {
-    if (applied_kind_ == Kind::kManual && applied_setting_ == *manual_) return {};
-    return send(Kind::kManual, *manual_);
+  if (in_bracket_) {
+    if (!pending_.empty()) {
+      held_ = pending_.front();
+      pending_.pop_front();
+    }
+    if (applied_kind_ == Kind::kManual && applied_setting_ == held_) return {};
+    return send(Kind::kManual, held_);
   }
   if (return_to_ && !restored_) {
     restored_ = true;

@@ -6,7 +6,9 @@
 // tested here with synthetic events.
 #pragma once
 
+#include <deque>
 #include <optional>
+#include <vector>
 
 namespace probelight {
 
@@ -32,11 +34,19 @@ struct ExposureControls {
 class ExposureSequencer {
  public:
   void setLocked(bool locked) { locked_ = locked; }
-  // A bracket frame's exposure; nullopt ends the bracket. The way back is
-  // the exposure the frames had before it, sent as a manual value first
-  // (so that AE does not restart from the short one, and a lock keeps
-  // exactly what it had), then the lock state's own controls.
-  void setManual(const std::optional<ExposureSetting>& exposure);
+  // A bracket's exposures, one request each, in order; the last is held.
+  // libcamera takes controls with each request, so a whole ladder asked at
+  // once reaches the sensor on consecutive frames and costs the pipeline's
+  // latency (the requests queued ahead, the sensor's own delay) once, not
+  // once a rung. A new ladder replaces the rungs not yet sent. Empty ends
+  // the bracket: rungs not yet sent are dropped, and the way back is the
+  // exposure the frames had before it, sent as a manual value first (so
+  // that AE does not restart from the short one, and a lock keeps exactly
+  // what it had), then the lock state's own controls.
+  void setManual(const std::vector<ExposureSetting>& ladder);
+  // From a ladder until it ends. A bracket's rungs are one frame each: the
+  // source must hand over every frame in order then, not only the newest.
+  bool inBracket() const { return in_bracket_; }
   // Each delivered frame's metadata: what to come back to after a bracket.
   void onFrame(const ExposureSetting& used);
   // What the next request must carry, and now counts as sent.
@@ -46,7 +56,9 @@ class ExposureSequencer {
 
  private:
   bool locked_ = false;
-  std::optional<ExposureSetting> manual_;     // in a bracket
+  bool in_bracket_ = false;
+  std::deque<ExposureSetting> pending_;       // the ladder's rungs not yet sent
+  ExposureSetting held_;                      // the bracket's newest rung sent
   std::optional<ExposureSetting> last_seen_;  // newest frame's
   std::optional<ExposureSetting> return_to_;  // set when a bracket ends
   bool restored_ = false;                     // return_to_ went out; the lock state is next

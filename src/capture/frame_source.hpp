@@ -147,19 +147,28 @@ class FrameSource {
     (void)locked;
     return false;
   }
-  // A fixed exposure (auto exposure off) for the frames that follow, as an
-  // exposure bracket needs; nullopt goes back to what lockExposure set.
-  // Frames already in flight keep their exposure: each frame's metadata
-  // (exposure_us, analogue_gain) says what it got, and a sensor may clamp
-  // the request. Returns false when the source has no such control.
+  // Fixed exposures (auto exposure off) for the frames that follow, one
+  // frame each, in order, as an exposure bracket needs; the last holds until
+  // the next call. A camera takes controls with each request, so a ladder
+  // asked at once arrives on consecutive frames after the pipeline's latency
+  // (a few frames), paid once. A new call replaces the exposures not yet
+  // begun; an empty one goes back to what lockExposure set. Frames already in
+  // flight keep their exposure: each frame's metadata (exposure_us,
+  // analogue_gain) says what it got, and a sensor may clamp the request.
+  // While a ladder is asked for, waitFrame hands over every frame in order
+  // (not only the newest), so that no rung is lost. Returns false when the
+  // source has no such control.
   struct ManualExposure {
     double exposure_us = 0.0;
     double analogue_gain = 1.0;
   };
-  virtual bool setManualExposure(const std::optional<ManualExposure>& exposure) {
-    (void)exposure;
+  virtual bool setExposureLadder(const std::vector<ManualExposure>& per_frame) {
+    (void)per_frame;
     return false;
   }
+  // The sensor's shortest exposure time (microseconds), where the source
+  // knows it: a ladder's rungs below it would all be taken at it.
+  virtual std::optional<double> shortestExposureUs() const { return std::nullopt; }
 };
 
 // Shared machinery for sources that make frames on a thread of their own:

@@ -65,6 +65,18 @@ inline void setManualExposure(libcamera::ControlList& controls, double exposure_
   controls.set(libcamera::controls::AwbEnable, false);
 }
 
+// The shortest exposure time the camera takes (microseconds): the minimum
+// of its ExposureTime control (an int32 in every version), or nullopt when
+// it does not say.
+inline std::optional<double> exposureTimeMinUs(const libcamera::Camera& camera) {
+  const libcamera::ControlInfoMap& info = camera.controls();
+  const auto entry = info.find(libcamera::controls::ExposureTime.id());
+  if (entry == info.end() || entry->second.min().type() != libcamera::ControlTypeInteger32) return std::nullopt;
+  const std::int32_t shortest_us = entry->second.min().get<std::int32_t>();
+  if (shortest_us <= 0) return std::nullopt;
+  return static_cast<double>(shortest_us);
+}
+
 // The Y'CbCr encoding of a validated stream. No colour space (old pipeline
 // handlers) means what they produce: JPEG's full-range Rec601.
 inline YcbcrEncoding encodingOf(const std::optional<libcamera::ColorSpace>& color_space) {

@@ -118,6 +118,10 @@ bool LibcameraSource::startCamera(std::string& error) {
     camera_.reset();
     return false;
   }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    shortest_exposure_us_ = libcamera_adapter::exposureTimeMinUs(*camera_);
+  }
   std::unique_ptr<libcamera::CameraConfiguration> config = libcamera_adapter::viewfinderConfiguration(*camera_);
   if (!config || config->size() != 1) {
     error = "camera: " + camera_->id() + " offers no viewfinder stream";
@@ -256,13 +260,17 @@ bool LibcameraSource::lockExposure(bool locked) {
   return true;
 }
 
-bool LibcameraSource::setManualExposure(const std::optional<ManualExposure>& exposure) {
+bool LibcameraSource::setExposureLadder(const std::vector<ManualExposure>& per_frame) {
+  std::vector<ExposureSetting> ladder;
+  for (const ManualExposure& exposure : per_frame) ladder.push_back({exposure.exposure_us, exposure.analogue_gain});
   std::lock_guard<std::mutex> lock(mutex_);
-  if (exposure)
-    exposure_.setManual(ExposureSetting{exposure->exposure_us, exposure->analogue_gain});
-  else
-    exposure_.setManual(std::nullopt);
+  exposure_.setManual(ladder);
   return true;
+}
+
+std::optional<double> LibcameraSource::shortestExposureUs() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return shortest_exposure_us_;
 }
 
 // The controls the exposure sequencer says this request must carry.
@@ -312,11 +320,17 @@ FrameWait LibcameraSource::waitFrame(std::chrono::milliseconds timeout, FrameLea
       return FrameWait::kError;
     }
     if (stopping_) return FrameWait::kEndOfStream;
-    // The newest frame; older ones would only add latency.
-    request = completed_.back();
-    completed_.pop_back();
-    stale.assign(completed_.begin(), completed_.end());
-    completed_.clear();
+    if (exposure_.inBracket()) {
+      // Each rung of a bracket is one frame: all of them, in order.
+      request = completed_.front();
+      completed_.pop_front();
+    } else {
+      // The newest frame; older ones would only add latency.
+      request = completed_.back();
+      completed_.pop_back();
+      stale.assign(completed_.begin(), completed_.end());
+      completed_.clear();
+    }
   }
   for (libcamera::Request* old : stale) requeue(old);
   Slot* slot = slotOf(request);

@@ -8,7 +8,8 @@
 // planes), and dropping the lease re-queues the request. libcamera's
 // completion callback only hands the request over, so its thread never
 // blocks. When several frames completed since the last wait, the newest is
-// handed out and the older ones go straight back (lowest latency).
+// handed out and the older ones go straight back (lowest latency), except
+// during an exposure bracket, whose frames are all handed out in order.
 //
 // Exposure: lockExposure(true) freezes auto exposure and white balance at
 // their current values (the lights are being fitted from the ball's image);
@@ -22,6 +23,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,9 +63,12 @@ class LibcameraSource final : public FrameSource {
   std::string lastError() const override;
   std::string name() const override;
   bool lockExposure(bool locked) override;
-  // ExposureTime and AnalogueGain with AE off (a bracket frame); nullopt
-  // goes back to the lock state. Sent with the next re-queued request.
-  bool setManualExposure(const std::optional<ManualExposure>& exposure) override;
+  // ExposureTime and AnalogueGain with AE off, one re-queued request a
+  // rung (a bracket); empty goes back to the lock state. While a ladder is
+  // asked for, completed requests are handed over oldest first, all of them.
+  bool setExposureLadder(const std::vector<ManualExposure>& per_frame) override;
+  // The minimum of the camera's ExposureTime control, once started.
+  std::optional<double> shortestExposureUs() const override;
   // The stream's colour encoding as the camera agreed it.
   YcbcrEncoding encoding() const { return encoding_; }
 
@@ -100,6 +105,7 @@ class LibcameraSource final : public FrameSource {
   std::string error_;
   // Exposure lock, bracket values, and what the pipeline already has.
   ExposureSequencer exposure_;
+  std::optional<double> shortest_exposure_us_;
 };
 
 // Why no camera was found, with the usual causes: one line.

@@ -37,19 +37,31 @@ bool SimFrameSource::lockExposure(bool locked) {
   return true;
 }
 
-bool SimFrameSource::setManualExposure(const std::optional<ManualExposure>& exposure) {
+bool SimFrameSource::setExposureLadder(const std::vector<ManualExposure>& per_frame) {
   std::lock_guard<std::mutex> lock(exposure_mutex_);
   // The consumer holds the newest frame; the pool's other buffers may hold
-  // the next ones already made. From newest + pool size on, none is.
-  // Changes every frame still to come is past need only the newest of
-  // them kept (an endless run recalibrates again and again).
+  // the next ones already made. From newest + pool size on, none is: the
+  // ladder starts there, and replaces what was to come from there on.
+  const std::uint64_t first = newest_handed_out_ + static_cast<std::uint64_t>(pool_size_);
+  while (!exposure_changes_.empty() && exposure_changes_.back().first >= first) exposure_changes_.pop_back();
+  // Of the changes every frame still to come is past, only the newest is
+  // needed (an endless run recalibrates again and again).
   std::size_t first_needed = 0;
   for (std::size_t i = 0; i < exposure_changes_.size(); ++i)
     if (exposure_changes_[i].first <= newest_handed_out_) first_needed = i;
   exposure_changes_.erase(exposure_changes_.begin(),
                           exposure_changes_.begin() + static_cast<std::ptrdiff_t>(first_needed));
-  exposure_changes_.emplace_back(newest_handed_out_ + static_cast<std::uint64_t>(pool_size_), exposure);
+  if (per_frame.empty()) {
+    exposure_changes_.emplace_back(first, std::nullopt);
+    return true;
+  }
+  for (std::size_t i = 0; i < per_frame.size(); ++i) exposure_changes_.emplace_back(first + i, per_frame[i]);
   return true;
+}
+
+std::optional<double> SimFrameSource::shortestExposureUs() const {
+  if (options_.min_exposure_us > 0.0 && options_.min_exposure_reported) return options_.min_exposure_us;
+  return std::nullopt;
 }
 
 FrameWait SimFrameSource::waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) {

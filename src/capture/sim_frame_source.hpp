@@ -29,6 +29,8 @@ struct SimCameraOptions {
   // The sensor's shortest exposure (microseconds; 0: any): a manual
   // exposure below it is taken at it, and the metadata says so.
   double min_exposure_us = 0.0;
+  // Whether shortestExposureUs() says it (real sources may not know).
+  bool min_exposure_reported = true;
   int failed_restarts = 0;
 };
 
@@ -45,14 +47,17 @@ class SimFrameSource : public ThreadedFrameSource {
   // The simulated camera has a fixed exposure (10 ms, gain 1, in every
   // frame's metadata): locking it changes nothing, and succeeds.
   bool lockExposure(bool locked) override;
-  // The simulated sensor takes any exposure: frames are rendered
-  // log2(exposure_us * gain / 10 ms) stops from the scene's exposure
-  // (sim::World::render's exposure_ev), and say so in their metadata. As a
-  // camera's pipeline does, a change applies from a fixed number of frames
-  // after the newest one handed out (the pool's size: no frame from there
-  // on has been made yet), so a simulated run stays the same frame for
-  // frame however the threads are scheduled.
-  bool setManualExposure(const std::optional<ManualExposure>& exposure) override;
+  // The simulated sensor takes any exposure from min_exposure_us up:
+  // frames are rendered log2(exposure_us * gain / 10 ms) stops from the
+  // scene's exposure (sim::World::render's exposure_ev), and say so in their
+  // metadata. As a camera's pipeline does, a ladder applies from a fixed
+  // number of frames after the newest one handed out (the pool's size: no
+  // frame from there on has been made yet), one rung a frame, so a
+  // simulated run stays the same frame for frame however the threads are
+  // scheduled. The simulated camera makes every frame it hands out (none is
+  // dropped), so every rung arrives in order.
+  bool setExposureLadder(const std::vector<ManualExposure>& per_frame) override;
+  std::optional<double> shortestExposureUs() const override;
   FrameWait waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) override;
 
  protected:
@@ -68,7 +73,8 @@ class SimFrameSource : public ThreadedFrameSource {
   int restarts_failed_ = 0;
   ImageRGB8 rendered_;      // YUV layouts: the picture before encoding
   std::mutex exposure_mutex_;  // set on the render thread, read on the producer's
-  // Exposure changes: from which frame index each applies.
+  // Exposure changes: from which frame index each applies (increasing;
+  // nullopt: the sensor's own exposure again).
   std::vector<std::pair<std::uint64_t, std::optional<ManualExposure>>> exposure_changes_;
   std::uint64_t newest_handed_out_ = 0;
   int pool_size_ = 3;

@@ -89,15 +89,30 @@ std::optional<double> measureExposureRatio(const ImageRGB8& reference, const Ima
   // Well exposed in both: away from the clip and well above the noise (a
   // few codes of noise on a dark value would swing the ratio).
   const int floor_code = std::max(settings.dark_code, 24);
-  std::vector<double> ratios;
-  for (size_t i = 0; i < reference.pixels.size(); ++i) {
+  // A ratio depends only on the two codes: count the code pairs, then walk
+  // the distinct pairs in order of their ratio to the median (the same
+  // element a sort of every channel's ratio would give, without a million
+  // of them to sort).
+  std::vector<std::uint32_t> pair_count(256 * 256, 0);
+  long samples = 0;
+  for (std::size_t i = 0; i < reference.pixels.size(); ++i) {
     const int a = reference.pixels[i], b = shorter.pixels[i];
     if (a >= settings.clip_code || b >= settings.clip_code || a <= floor_code || b <= floor_code) continue;
-    ratios.push_back(linear[static_cast<size_t>(b)] / linear[static_cast<size_t>(a)]);
+    ++pair_count[static_cast<std::size_t>(a) * 256 + static_cast<std::size_t>(b)];
+    ++samples;
   }
-  if (static_cast<int>(ratios.size()) < min_samples) return std::nullopt;
-  std::nth_element(ratios.begin(), ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2), ratios.end());
-  return ratios[ratios.size() / 2];
+  if (samples < min_samples) return std::nullopt;
+  std::vector<std::pair<double, std::uint32_t>> ratios;  // ratio, channels with it
+  for (std::size_t a = 0; a < 256; ++a)
+    for (std::size_t b = 0; b < 256; ++b)
+      if (const std::uint32_t count = pair_count[a * 256 + b]; count > 0) ratios.emplace_back(linear[b] / linear[a], count);
+  std::sort(ratios.begin(), ratios.end());
+  long seen = 0;
+  for (const auto& [ratio, count] : ratios) {
+    seen += count;
+    if (seen > samples / 2) return ratio;
+  }
+  return ratios.back().first;
 }
 
 }  // namespace probelight::ibl

@@ -176,6 +176,24 @@ CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMer
     return Taps{{y0 * image.width + x0, y0 * image.width + x1, y1 * image.width + x0, y1 * image.width + x1},
                 {(1 - fu) * (1 - fv), fu * (1 - fv), (1 - fu) * fv, fu * fv}};
   };
+  // Frames of a still camera are merged through one pose (the reference's,
+  // or the frame's before them): a direction's pixel is found once per
+  // distinct view, not once per frame.
+  auto sameView = [](const MirrorBallView& a, const MirrorBallView& b) {
+    return a.pose.R_cam_from_world == b.pose.R_cam_from_world && a.pose.t_cam_from_world == b.pose.t_cam_from_world &&
+           a.center_w == b.center_w && a.radius_m == b.radius_m && a.camera.fx_px == b.camera.fx_px &&
+           a.camera.fy_px == b.camera.fy_px && a.camera.cx_px == b.camera.cx_px && a.camera.cy_px == b.camera.cy_px &&
+           a.camera.distortion == b.camera.distortion;
+  };
+  std::vector<std::size_t> view_of(frames.size());
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    view_of[f] = f;
+    for (std::size_t g = 0; g < f; ++g)
+      if (sameView(frames[f].view, frames[g].view)) {
+        view_of[f] = g;
+        break;
+      }
+  }
   const MirrorBallView& reference = frames.front().view;
   return sampleCube(
       reference, params,
@@ -188,8 +206,12 @@ CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMer
         glm::dvec3 sum(0.0), weight_sum(0.0);
         std::optional<Taps> at_shortest, at_longest;
         bool seen = false;
+        thread_local std::vector<std::optional<glm::dvec2>> pixels;  // sampleCube runs on several threads
+        pixels.assign(frames.size(), std::nullopt);
         for (std::size_t f = 0; f < frames.size(); ++f) {
-          const auto pixel = reflectedDirectionToPixel(frames[f].view, direction_w, params.normal_iterations);
+          pixels[f] = view_of[f] == f ? reflectedDirectionToPixel(frames[f].view, direction_w, params.normal_iterations)
+                                      : pixels[view_of[f]];
+          const std::optional<glm::dvec2>& pixel = pixels[f];
           if (!pixel) continue;
           seen = true;
           const Taps t = taps(*frames[f].image, *pixel);

@@ -195,20 +195,48 @@ glm::dvec3 integrateCosine(const std::vector<glm::dvec3>& cells, const glm::dvec
 }
 
 // Smooth value noise in [-1, 1] with zero mean: a floor texture with no edges,
-// so it never looks like a tag to the detector.
-double valueNoise(double x, double y, std::uint64_t salt) {
-  double fx = std::floor(x), fy = std::floor(y);
-  auto lattice = [&](double ix, double iy) {
-    std::uint64_t h = splitMix64(salt ^ splitMix64(static_cast<std::uint64_t>(static_cast<std::int64_t>(ix)) * 73856093ull ^
-                                                   static_cast<std::uint64_t>(static_cast<std::int64_t>(iy)) * 19349663ull));
+// so it never looks like a tag to the detector. Its lattice values are
+// hashed from (salt, ix, iy); the ones within kTabulatedCells of the origin
+// are hashed once, up front (hashing four per lookup, two lookups per floor
+// hit, was nearly half of a frame's time), the rest as they are needed: the
+// same function everywhere, bit for bit.
+class ValueNoise {
+ public:
+  static constexpr std::int64_t kTabulatedCells = 128;
+
+  explicit ValueNoise(std::uint64_t salt) : salt_(salt), table_(kSide * kSide) {
+    for (std::int64_t iy = -kTabulatedCells; iy <= kTabulatedCells; ++iy)
+      for (std::int64_t ix = -kTabulatedCells; ix <= kTabulatedCells; ++ix)
+        table_[static_cast<std::size_t>((iy + kTabulatedCells) * kSide + ix + kTabulatedCells)] = hashed(ix, iy);
+  }
+
+  double operator()(double x, double y) const {
+    const double fx = std::floor(x), fy = std::floor(y);
+    const auto ix = static_cast<std::int64_t>(fx), iy = static_cast<std::int64_t>(fy);
+    double tx = x - fx, ty = y - fy;
+    tx = tx * tx * (3 - 2 * tx);
+    ty = ty * ty * (3 - 2 * ty);
+    const double a = lattice(ix, iy), b = lattice(ix + 1, iy), c = lattice(ix, iy + 1), d = lattice(ix + 1, iy + 1);
+    return (a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty;
+  }
+
+ private:
+  static constexpr std::int64_t kSide = 2 * kTabulatedCells + 1;
+
+  double hashed(std::int64_t ix, std::int64_t iy) const {
+    const std::uint64_t h = splitMix64(salt_ ^ splitMix64(static_cast<std::uint64_t>(ix) * 73856093ull ^
+                                                          static_cast<std::uint64_t>(iy) * 19349663ull));
     return static_cast<double>(h >> 11) / static_cast<double>(1ull << 53) * 2.0 - 1.0;
-  };
-  double tx = x - fx, ty = y - fy;
-  tx = tx * tx * (3 - 2 * tx);
-  ty = ty * ty * (3 - 2 * ty);
-  double a = lattice(fx, fy), b = lattice(fx + 1, fy), c = lattice(fx, fy + 1), d = lattice(fx + 1, fy + 1);
-  return (a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty;
-}
+  }
+  double lattice(std::int64_t ix, std::int64_t iy) const {
+    if (ix < -kTabulatedCells || ix > kTabulatedCells || iy < -kTabulatedCells || iy > kTabulatedCells)
+      return hashed(ix, iy);
+    return table_[static_cast<std::size_t>((iy + kTabulatedCells) * kSide + ix + kTabulatedCells)];
+  }
+
+  std::uint64_t salt_;
+  std::vector<double> table_;
+};
 
 struct TruthGrid {
   std::vector<glm::dvec3> hdr;      // camera linear units
@@ -527,7 +555,11 @@ struct FrameState {
 }  // namespace
 
 struct World::Impl {
+  explicit Impl(const SceneConfig& config)
+      : scene(config), coarse_floor_noise(config.seed), fine_floor_noise(config.seed + 7) {}
   SceneConfig scene;
+  // The floor texture's two octaves.
+  ValueNoise coarse_floor_noise, fine_floor_noise;
   std::unique_ptr<Environment> environment;
   std::unique_ptr<CameraPath> path;
   std::unique_ptr<TagPattern> tag;
@@ -588,7 +620,7 @@ struct World::Impl {
     }
     object = SceneObject::kFloor;
     if (scene.floor_texture_contrast <= 0.0) return scene.floor_albedo;
-    double texture = 0.65 * valueNoise(x / 0.09, y / 0.09, scene.seed) + 0.35 * valueNoise(x / 0.027, y / 0.027, scene.seed + 7);
+    double texture = 0.65 * coarse_floor_noise(x / 0.09, y / 0.09) + 0.35 * fine_floor_noise(x / 0.027, y / 0.027);
     return std::clamp(scene.floor_albedo * (1.0 + scene.floor_texture_contrast * texture), 0.0, 1.0);
   }
 
@@ -1238,10 +1270,10 @@ void validate(const SceneConfig& s) {
 
 }  // namespace
 
-World::World(SceneConfig scene) : impl_(std::make_unique<Impl>()) {
+World::World(SceneConfig scene) {
   validate(scene);
+  impl_ = std::make_unique<Impl>(scene);
   Impl& w = *impl_;
-  w.scene = std::move(scene);
   w.environment = makeEnvironment(w.scene.environment);
   w.path = makeCameraPath(w.scene);
   w.tag = std::make_unique<TagPattern>(w.scene.rig.tag_family, w.scene.rig.tag_id, w.scene.rig.tag_size_m);

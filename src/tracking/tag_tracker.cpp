@@ -476,4 +476,16 @@ TagTrackResult TagTracker::track(const std::uint8_t* luma, int width, int height
   return result;
 }
 
+void TagTracker::seed(const PoseCamFromWorld& pose) {
+  flip_resolver_.seed(pose.R_cam_from_world * glm::dvec3(0.0, 0.0, 1.0));
+  last_printed_corners_px_.reset();
+  if (const int border_cells = detector_.borderWidthCells(); border_cells > 0) {
+    const double printed_size_m = rig_.tag_size_m * detector_.totalWidthCells() / border_cells;
+    last_printed_corners_px_ = printedCornersPx(pose, printed_size_m, camera_);
+  }
+  printed_corner_velocity_px_ = {};
+  frames_since_found_ = 0;
+  frames_since_full_search_ = 0;
+}
+
 }  // namespace probelight::tracking

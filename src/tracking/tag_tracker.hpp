@@ -57,6 +57,8 @@ class PoseFlipResolver {
   // `solutions_best_first` as solveTagPoses returns them; records the choice.
   PoseChoice choose(const std::vector<TagPoseSolution>& solutions_best_first);
   void reset() { reference_normal_cam_.reset(); }
+  // The tag's normal (camera frame) from a pose chosen elsewhere.
+  void seed(const glm::dvec3& tag_normal_cam) { reference_normal_cam_ = tag_normal_cam; }
 
  private:
   double margin_px_;
@@ -113,6 +115,13 @@ class TagTracker {
   // `luma`: 8-bit plane, `stride_bytes` per row, read in place. Never throws;
   // an empty, tiny, black or white frame gives found = false.
   TagTrackResult track(const std::uint8_t* luma, int width, int height, int stride_bytes);
+
+  // Starts from a pose found in this frame by another tracker (the kiosk's,
+  // for the frames of a bracket taken right after it): the next track()
+  // searches the window around it, as after a frame of its own that found
+  // the tag, and settles a planar ambiguity toward it, without a search of
+  // the whole frame.
+  void seed(const PoseCamFromWorld& pose);
 
   // Forget the pose history (e.g. after the camera was moved by hand).
   void resetHistory() {

@@ -664,7 +664,12 @@ namespace {
 // renders them; their metadata says their exposure) until the ball no
 // longer clips, merges them, and fits the lights from the HDR map: the
 // dominant light within the 5 deg of the simulator's sun. The same
-// from NV12 frames.
+// from NV12 frames. The whole ladder is asked for at once, so the camera's
+// latency is paid once: the simulated camera applies a change from its
+// pool's length (3) after the frame in hand, so the bracket's first frame is
+// the fit frame's third successor and the others follow one a frame (asked
+// for one rung at a time, each rung would wait that latency again: 9
+// frames instead of 5 in this world).
 TEST_F(EndToEnd, RecalibrationBracketsTheBallAndFindsTheSun) {
   const sim::World world(sim::defaultScene());
   glm::dvec3 sun(0.0, 0.0, 1.0);
@@ -703,6 +708,8 @@ TEST_F(EndToEnd, RecalibrationBracketsTheBallAndFindsTheSun) {
       }
     }
     EXPECT_GE(used, 1);
+    EXPECT_EQ(hdr["camera_frames"].get<int>(), 2 + static_cast<int>(hdr["frames"].size())) << hdr.dump(2);
+    EXPECT_LE(hdr["own_ms"].get<double>(), hdr["wall_ms"].get<double>());
     EXPECT_GE(hdr["clipped_lights"].size(), 1u);
     const auto& d = report["lights"]["dominant_light"]["direction"];
     const glm::dvec3 dominant(d[0].get<double>(), d[1].get<double>(), d[2].get<double>());
@@ -761,30 +768,46 @@ namespace probelight {
 namespace {
 
 // A sensor that cannot expose shorter than 100 us (the simulated one here,
-// sim.min_exposure_us; real ones have such a limit): the bracket asks for
-// EV -3 (1250 us), -6 (156 us), then -9 (20 us) and gets 100 us (EV -6.6).
-// That frame is kept at the EV its metadata says, the bracket ends there,
-// and the merge says what still clipped. The lights are fitted all the same.
+// sim.min_exposure_us; real ones have such a limit): the ladder EV -3
+// (1250 us), -6 (156 us), -9 (20 us) gets 100 us (EV -6.6) at its third
+// rung. Where the camera says its shortest exposure (libcamera's
+// ExposureTime minimum), the ladder is planned to it and ends there; where
+// it does not, three frames that bring nothing shorter end it. Either way
+// that frame is kept at the EV its metadata says, and the merge says what
+// still clipped. The lights are fitted all the same.
 TEST_F(EndToEnd, ASensorsShortestExposureEndsTheBracketWithWhatItGave) {
-  const fs::path config = dir_ / "limited.yaml";
-  std::ofstream(config) << "sim:\n  env: sun_sky\n  min_exposure_us: 100\n";
-  const fs::path out = dir_ / "out";
-  const CommandResult result =
-      run("run --frames 30 --save-every 0 --path static --config " + config.string() + " --out " + out.string());
-  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
-  const nlohmann::json report = readReport(out);
-  EXPECT_EQ(report["counters"]["bracket_exposures_clamped"], 1) << report["counters"].dump();
-  EXPECT_EQ(report["counters"]["calibrations_completed"], 1);
-  const nlohmann::json& hdr = report["hdr"];
-  ASSERT_EQ(hdr["method"], "bracket") << hdr.dump(2);
-  ASSERT_EQ(hdr["frames"].size(), 3u) << hdr.dump(2);
-  const nlohmann::json& last = hdr["frames"][2];
-  EXPECT_TRUE(last["used"].get<bool>()) << last.dump();
-  EXPECT_NEAR(last["ev"].get<double>(), std::log2(100.0 / 10000.0), 1e-6);
-  // The sun needs EV -12 here: at -6.6 some of it still clips, and the
-  // status says so.
-  EXPECT_GT(hdr["still_clipped_sr"].get<double>(), 0.0);
-  EXPECT_NE(hdr["status"].get<std::string>().find("clipped even in the shortest"), std::string::npos) << hdr.dump();
+  for (const bool reported : {true, false}) {
+    const fs::path config = dir_ / (reported ? "told.yaml" : "untold.yaml");
+    std::ofstream(config) << "sim:\n  env: sun_sky\n  min_exposure_us: 100\n  min_exposure_reported: "
+                          << (reported ? "true" : "false") << "\n";
+    const fs::path out = dir_ / (reported ? "told" : "untold");
+    const CommandResult result =
+        run("run --frames 30 --save-every 0 --path static --config " + config.string() + " --out " + out.string());
+    ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+    const nlohmann::json report = readReport(out);
+    EXPECT_EQ(report["counters"]["bracket_exposures_clamped"], 1) << report["counters"].dump();
+    EXPECT_EQ(report["counters"]["calibrations_completed"], 1);
+    const nlohmann::json& hdr = report["hdr"];
+    ASSERT_EQ(hdr["method"], "bracket") << hdr.dump(2);
+    ASSERT_EQ(hdr["frames"].size(), 3u) << hdr.dump(2);
+    const nlohmann::json& last = hdr["frames"][2];
+    EXPECT_TRUE(last["used"].get<bool>()) << last.dump();
+    EXPECT_NEAR(last["ev"].get<double>(), std::log2(100.0 / 10000.0), 1e-6);
+    // Told, the ladder's last rung is that exposure and the bracket ends on
+    // it; untold, it asks down to EV -12 and waits three frames more.
+    if (reported) {
+      ASSERT_EQ(hdr["ladder_ev"].size(), 3u) << hdr.dump(2);
+      EXPECT_NEAR(hdr["ladder_ev"][2].get<double>(), std::log2(100.0 / 10000.0), 1e-9);
+      EXPECT_EQ(hdr["camera_frames"].get<int>(), 2 + 3);
+    } else {
+      EXPECT_EQ(hdr["ladder_ev"].size(), 4u) << hdr.dump(2);
+      EXPECT_EQ(hdr["camera_frames"].get<int>(), 2 + 3 + 3);
+    }
+    // The sun needs EV -12 here: at -6.6 some of it still clips, and the
+    // status says so.
+    EXPECT_GT(hdr["still_clipped_sr"].get<double>(), 0.0);
+    EXPECT_NE(hdr["status"].get<std::string>().find("clipped even in the shortest"), std::string::npos) << hdr.dump();
+  }
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // each exposure.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -97,6 +98,36 @@ TEST(HdrBracket, TheExposureRatioIsMeasuredFromTheFramesThemselves) {
   ImageRGB8 white = reference;
   std::fill(white.pixels.begin(), white.pixels.end(), 255);
   EXPECT_FALSE(measureExposureRatio(reference, white, settings, 100));
+}
+
+// The ratio is the median over every channel well exposed in both frames,
+// exactly: the same element a sort of all of them gives (it is found by
+// counting code pairs). Noisy frames, so that many distinct pairs occur.
+TEST(HdrBracket, TheExposureRatioIsTheMedianOfEveryChannelsRatio) {
+  ImageRGB8 reference = exposeRamp(640, 48, 0.0), shorter = exposeRamp(640, 48, -2.3);
+  std::uint64_t state = 12345;
+  auto jitter = [&](std::uint8_t code) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    const int delta = static_cast<int>((state >> 33) % 9) - 4;
+    return static_cast<std::uint8_t>(std::clamp(code + delta, 0, 255));
+  };
+  for (auto& code : reference.pixels) code = jitter(code);
+  for (auto& code : shorter.pixels) code = jitter(code);
+  const HdrMergeSettings settings;
+  const int floor_code = std::max(settings.dark_code, 24);
+  std::vector<double> ratios;
+  for (std::size_t i = 0; i < reference.pixels.size(); ++i) {
+    const int a = reference.pixels[i], b = shorter.pixels[i];
+    if (a >= settings.clip_code || b >= settings.clip_code || a <= floor_code || b <= floor_code) continue;
+    ratios.push_back(decodeCameraValue(settings.camera_transfer, b / 255.0) /
+                     decodeCameraValue(settings.camera_transfer, a / 255.0));
+  }
+  ASSERT_GT(ratios.size(), 10000u);
+  std::sort(ratios.begin(), ratios.end());
+  const std::optional<double> measured = measureExposureRatio(reference, shorter, settings, 100);
+  ASSERT_TRUE(measured);
+  EXPECT_DOUBLE_EQ(*measured, ratios[ratios.size() / 2]);
+  EXPECT_NEAR(std::log2(*measured), -2.3, 0.1);
 }
 
 TEST(HdrBracket, BadBracketsAreNamed) {

@@ -66,5 +66,50 @@ TEST(SimFrameSource, ProducerWaitsForLeasesToComeBackToThePool) {
   source.stop();
 }
 
+// An exposure ladder, as a bracket asks for it: it starts a pool's length
+// after the frame the consumer holds (the frames made ahead keep their
+// exposure, as a camera's queued requests do), one rung a frame, the last
+// held; ending it early drops the rungs not begun, from a pool's length
+// after the frame held then. The sensor's shortest exposure clamps a rung,
+// and the metadata says what each frame got; the pixels follow it.
+TEST(SimFrameSource, AnExposureLadderArrivesOneRungAFrameAfterThePoolsLatency) {
+  SimCameraOptions options;
+  options.min_exposure_us = 100.0;
+  auto world = smallWorld();
+  SimFrameSource source(world, 0, 3, options);
+  ASSERT_EQ(source.shortestExposureUs(), 100.0);
+  std::string error;
+  ASSERT_TRUE(source.start(error)) << error;
+  auto next = [&]() {
+    FrameLease lease;
+    EXPECT_EQ(source.waitFrame(5s, lease), FrameWait::kFrame);
+    return lease;
+  };
+  FrameLease held = next();  // frame 0
+  ASSERT_EQ(held->metadata.sequence, 0u);
+  ASSERT_TRUE(source.setExposureLadder({{1250.0, 1.0}, {156.25, 1.0}, {19.5, 1.0}}));
+  held.release();
+  std::vector<double> exposures_us;
+  for (int i = 1; i <= 7; ++i) {
+    FrameLease lease = next();
+    ASSERT_EQ(lease->metadata.sequence, static_cast<std::uint64_t>(i));
+    exposures_us.push_back(lease->metadata.exposure_us);
+    if (i == 4) {
+      // The pixels are the world's at that exposure: EV -6 here.
+      ImageRGB8 direct;
+      FrameTruth ignored;
+      world->render(4, direct, ignored, std::log2(156.25 / 10000.0));
+      EXPECT_EQ(lease->rgb.pixels, direct.pixels);
+      // Ended here: frames 5 and 6 were asked for already, 7 on are back.
+      ASSERT_TRUE(source.setExposureLadder({}));
+    }
+  }
+  const std::vector<double> expected_us = {10000.0, 10000.0, 1250.0, 156.25, 100.0, 100.0, 10000.0};
+  EXPECT_EQ(exposures_us, expected_us);
+  options.min_exposure_reported = false;
+  EXPECT_FALSE(SimFrameSource(world, 1, 3, options).shortestExposureUs().has_value());
+  source.stop();
+}
+
 }  // namespace
 }  // namespace probelight

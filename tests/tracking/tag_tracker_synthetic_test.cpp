@@ -561,5 +561,41 @@ TEST(TagTrackerWindow, FollowsTheTagInAWindowWithTheSameResultAndFallsBackWhenIt
   }
 }
 
+// A tracker seeded with a pose found by another (as a bracket's tracker is
+// with the kiosk's, for the frames taken right after) searches a window at
+// its first frame, and finds what a whole-frame search finds there (the
+// tolerance above); seeded with a pose far from the tag, the window misses
+// and it falls back to the whole frame, still finding it.
+TEST(TagTrackerWindow, ASeededTrackerSearchesAWindowAtItsFirstFrame) {
+  sim::SceneConfig scene = sim::defaultScene();
+  sim::World world(scene);
+  tracking::TagDetectorSettings settings;
+  settings.family = scene.rig.tag_family;
+  TagTracker full(settings, scene.rig, scene.camera);
+  const SimFrame first = renderSimFrame(world, 0), next = renderSimFrame(world, 1);
+  const TagTrackResult found = trackSimFrame(full, first);
+  ASSERT_TRUE(found.found) << found.status;
+  EXPECT_FALSE(full.lastSearchWasWindowed());
+  const TagTrackResult reference = trackSimFrame(full, next);
+  ASSERT_TRUE(reference.found);
+
+  TagTracker seeded(settings, scene.rig, scene.camera);
+  seeded.seed(found.pose);
+  const TagTrackResult result = trackSimFrame(seeded, next);
+  ASSERT_TRUE(result.found) << result.status;
+  EXPECT_TRUE(seeded.lastSearchWasWindowed());
+  for (int k = 0; k < 4; ++k) EXPECT_LT(glm::length(result.corners_px[k] - reference.corners_px[k]), 0.05) << k;
+
+  // Seeded a metre to the side: the tag is not in that window.
+  PoseCamFromWorld elsewhere = found.pose;
+  elsewhere.t_cam_from_world.x += 1.0;
+  TagTracker misled(settings, scene.rig, scene.camera);
+  misled.seed(elsewhere);
+  const TagTrackResult recovered = trackSimFrame(misled, next);
+  ASSERT_TRUE(recovered.found) << recovered.status;
+  EXPECT_FALSE(misled.lastSearchWasWindowed());
+  EXPECT_LT(tracking::rotationDifferenceDeg(recovered.pose.R_cam_from_world, next.truth.pose.R_cam_from_world), 0.3);
+}
+
 }  // namespace
 }  // namespace probelight
