@@ -21,6 +21,7 @@
 #include "app/app_settings.hpp"
 #include "app/bracket_merge.hpp"
 #include "app/log_priority.hpp"
+#include "app/post_report.hpp"
 #include "app/stage_settings.hpp"
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
@@ -38,6 +39,7 @@
 #include "ibl/light_dome.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_outline.hpp"
+#include "ibl/post_reference.hpp"
 #include "ibl/white_reference.hpp"
 #include "pipeline/camera_frame_texture.hpp"
 #include "pipeline/environment_maps.hpp"
@@ -501,6 +503,20 @@ class Analyzer {
                             {"added_radiance_rgb", vec3Json(result.added_radiance_rgb)},
                             {"clipped_upper_sr", result.clipped_upper_sr},
                             {"clipped_lower_sr", result.clipped_lower_sr}};
+    // The post divides the border's light between the clipped regions.
+    bool post_refined = false;
+    if (result.status == ibl::WhiteReferenceStatus::kCorrected && options_.post_reference) {
+      ibl::PostReadingSettings post_settings;
+      post_settings.camera_transfer = settings_.maps.stages.camera_transfer;
+      const ibl::PostCorrection post =
+          ibl::correctClippedWithPost(corrected, *reflection_, &reflection_validity_, clipLevel(), &clipped_mask_,
+                                      reading, rig_, camera_, track_.pose, read_frame, post_settings);
+      border["post"] = postCorrectionJson<Json>(post, rig_);
+      post_refined = post.fit.status == ibl::DiffuseFitStatus::kRefined;
+      if (post.fit.status == ibl::DiffuseFitStatus::kInconsistent && !hdr_reflection_)
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: " << (render_ ? "render" : "analyze")
+             << ": warning: the ball's post: " << post.fit.message << "\n";
+    }
     border["ms"] = msSince(start);
     Json& hdr = result_.json["hdr"];
     hdr["white_border"] = border;
@@ -510,7 +526,7 @@ class Analyzer {
       hdr["method"] = "none";
       hdr["status"] = "--no-white-ref: the 8-bit map stands";
     } else if (usable) {
-      hdr["method"] = "white_border";
+      hdr["method"] = post_refined ? "white_border_and_post" : "white_border";
       hdr["status"] = result.message;
       hdr_reflection_ = std::move(corrected);
     } else {

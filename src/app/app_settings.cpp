@@ -126,6 +126,7 @@ AppSettings loadAppSettings(const std::string& path) {
   light_settings.refit_change_fraction =
       lights.readDouble("refit_change_fraction", light_settings.refit_change_fraction, Range::openClosed(0.0, 10.0));
   light_settings.white_reference = lights.readBool("white_reference", light_settings.white_reference);
+  light_settings.post_reference = lights.readBool("post_reference", light_settings.post_reference);
   light_settings.bracket_step_stops =
       lights.readDouble("bracket_step_stops", light_settings.bracket_step_stops, Range::closed(0.5, 8.0));
   light_settings.bracket_max_stops =

@@ -70,6 +70,10 @@ struct LightsConfig {
   // (ibl/white_reference.hpp): the dome is fitted from the corrected map and
   // the object shaded with the clipped lights until the next fit.
   bool white_reference = true;
+  // ... and the ball's post, where rig.yaml describes one (post_radius,
+  // post_albedo), divides that light between the clipped regions by its
+  // readings at the normals it turns to the camera (ibl/post_reference.hpp).
+  bool post_reference = true;
   // At each fit whose frame shows the ball clipped, `run` takes shorter
   // exposures, bracket_step_stops apart, while the ball still clips, down
   // to bracket_max_stops under the frame's (0: no bracket), and fits the

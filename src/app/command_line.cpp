@@ -150,7 +150,9 @@ AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
               {"--out", into(options.out_dir)},
               {"--config", into(options.config_path)},
               {"--bracket", [&](auto& f, auto& v) { options.brackets.push_back(parseBracket(f, v)); }}},
-             {{"--no-white-ref", [&] { options.white_reference = false; }}}, "analyze");
+             {{"--no-white-ref", [&] { options.white_reference = false; }},
+              {"--no-post-ref", [&] { options.post_reference = false; }}},
+             "analyze");
   // No defaults for these: analysing a frame with some other camera's
   // calibration, or writing over someone's folder, gives plausible nonsense.
   if (options.frame_path.empty()) throw UsageError("analyze needs --frame FILE (the camera frame to analyse)");
@@ -199,7 +201,9 @@ RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
                    if (c < 0.0 || c > 1.0) throw UsageError("flag " + f + ": albedo must be in [0, 1], got '" + v + "'");
                  options.albedo = {a[0], a[1], a[2]};
                }}},
-             {{"--no-white-ref", [&] { options.frame.white_reference = false; }}}, "render");
+             {{"--no-white-ref", [&] { options.frame.white_reference = false; }},
+              {"--no-post-ref", [&] { options.frame.post_reference = false; }}},
+             "render");
   if (options.frame.frame_path.empty()) throw UsageError("render needs --frame FILE (the camera frame)");
   if (options.frame.camera_path.empty()) throw UsageError("render needs --camera camera.yaml (the calibration of the camera that took it)");
   if (options.frame.rig_path.empty()) throw UsageError("render needs --rig rig.yaml");
@@ -267,9 +271,10 @@ usage:
                                and pictures (overlay.png, ball.png, reflection_cross.png, diffuse_cross.png)
       [--bracket FILE@EV]...   the same view EV stops shorter (e.g. under3.png@-3), merged into HDR light
       [--no-white-ref]         without a bracket, do not use the tag's white border to restore clipped light
+      [--no-post-ref]          nor the ball's post (rig.yaml post_radius, post_albedo) to divide that light
   probelight render --frame F --camera camera.yaml --rig rig.yaml --out DIR --object sphere --radius R
                     [--at X,Y] [--albedo A|R,G,B] [--config probelight.yaml]
-  probelight render ... --object box --size X,Y,Z [--yaw DEG]   (and analyze's --bracket, --no-white-ref)
+  probelight render ... --object box --size X,Y,Z [--yaw DEG]   (and analyze's --bracket, --no-white-ref, --no-post-ref)
                                a virtual object put into one frame, lit by what its ball shows and
                                casting its shadow on the real ground: DIR/composite.png and analysis.json
   probelight calibrate-camera --images GLOB --board COLSxROWS --square METRES --out camera.yaml

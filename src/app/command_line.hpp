@@ -56,6 +56,10 @@ struct AnalyzeOptions {
   // instead of giving its clipped highlights the light the tag's white
   // border says they hide (to compare the two).
   bool white_reference = true;
+  // --no-post-ref: leave the border's light shared out by solid angle,
+  // without the ball's post (rig.yaml post_radius, post_albedo) dividing it
+  // between the clipped regions (ibl/post_reference.hpp).
+  bool post_reference = true;
 };
 
 // Parses the flags after `probelight analyze`. Throws UsageError.

@@ -21,6 +21,7 @@
 #include "app/light_transition.hpp"
 #include "app/lighting_state_machine.hpp"
 #include "app/log_priority.hpp"
+#include "app/post_report.hpp"
 #include "app/map_update_policy.hpp"
 #include "app/run_report.hpp"
 #include "app/reconnect_backoff.hpp"
@@ -1160,6 +1161,18 @@ class Kiosk {
     const ibl::WhiteReferenceResult result =
         ibl::correctClippedWithWhiteBorder(corrected, &validity, reading, inputs_.rig.tag_white_albedo, clip_level, &mask);
     const bool used = result.status == ibl::WhiteReferenceStatus::kCorrected;
+    // lights.post_reference: the post divides that light between the
+    // clipped regions (ibl/post_reference.hpp).
+    std::optional<ibl::PostCorrection> post;
+    if (used && inputs_.settings.lights.post_reference) {
+      ibl::PostReadingSettings post_settings;
+      post_settings.camera_transfer = settings.camera_transfer;
+      post = ibl::correctClippedWithPost(corrected, original, &validity, clip_level, &mask, reading, inputs_.rig,
+                                         view.camera, view.pose, read, post_settings);
+      report_.count(std::string("post_") + ibl::toString(post->reading.status));
+      if (post->fit.status == ibl::DiffuseFitStatus::kInconsistent)
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: the ball's post: " << post->fit.message << "\n";
+    }
     if (used) clipped_lights = ibl::clippedLights(corrected, original, &validity, clip_level, &mask);
     report_.count(std::string("white_border_") + ibl::toString(result.status));
     nlohmann::json lights = nlohmann::json::array();
@@ -1177,6 +1190,7 @@ class Kiosk {
                                      {"ball_irradiance_rgb", {result.map_irradiance_rgb.r, result.map_irradiance_rgb.g,
                                                               result.map_irradiance_rgb.b}},
                                      {"clipped_lights", lights}};
+    if (post) report_.extra["white_border"]["post"] = postCorrectionJson<nlohmann::json>(*post, inputs_.rig);
     if (!used && (result.status == ibl::WhiteReferenceStatus::kBorderDarker ||
                   (result.status == ibl::WhiteReferenceStatus::kBorderUnusable && result.clipped_upper_sr > 0.0)))
       log_ << logPrefix(LogPriority::kWarning)

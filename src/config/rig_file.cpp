@@ -56,6 +56,13 @@ void validateRigGeometry(const RigGeometry& rig, const std::string& path) {
     fail("probe_reflectance", formatNumber(rig.probe_reflectance) + " is out of range, must be in (0, 1]");
   if (!(rig.tag_white_albedo > 0 && rig.tag_white_albedo <= 1))
     fail("tag_white_albedo", formatNumber(rig.tag_white_albedo) + " is out of range, must be in (0, 1]");
+  if (!(rig.post_radius_m >= 0 && rig.post_radius_m < rig.probe_radius_m))
+    fail("post_radius", formatNumber(rig.post_radius_m) + " is out of range, must be in [0, probe_radius)");
+  if (rig.post_radius_m > 0 && !(rig.probe_center_w.z > rig.probe_radius_m))
+    fail("post_radius", "a post is set, but probe_center's z (" + formatNumber(rig.probe_center_w.z) +
+                            ") puts the ball on the ground: no post under it (set post_radius to 0)");
+  if (!(rig.post_albedo >= 0 && rig.post_albedo <= 1))
+    fail("post_albedo", formatNumber(rig.post_albedo) + " is out of range, must be in [0, 1]");
 }
 
 RigGeometry loadRigFile(const std::string& path) {
@@ -69,6 +76,8 @@ RigGeometry loadRigFile(const std::string& path) {
   rig.probe_radius_m = file.readDouble("probe_radius", kRequired, Range::above(0.0));
   rig.probe_reflectance = file.readDouble("probe_reflectance", 1.0, Range::openClosed(0.0, 1.0));
   rig.tag_white_albedo = file.readDouble("tag_white_albedo", 0.85, Range::openClosed(0.0, 1.0));
+  rig.post_radius_m = file.readDouble("post_radius", 0.0, Range::closed(0.0, 1.0));
+  rig.post_albedo = file.readDouble("post_albedo", 0.0, Range::closed(0.0, 1.0));
   file.rejectUnknownFields();
   validateRigGeometry(rig, path);
   return rig;
@@ -85,6 +94,8 @@ void saveRigFile(const std::string& path, const RigGeometry& rig) {
   storage << "probe_radius" << rig.probe_radius_m;
   storage << "probe_reflectance" << rig.probe_reflectance;
   storage << "tag_white_albedo" << rig.tag_white_albedo;
+  storage << "post_radius" << rig.post_radius_m;
+  storage << "post_albedo" << rig.post_albedo;
   storage.release();
 }
 

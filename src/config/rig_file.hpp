@@ -22,7 +22,9 @@ const std::vector<TagFamilyInfo>& knownTagFamilies();
 // tag_size (metres, outer edge of the black border, > 0), probe_center
 // ([x, y, z] in W, metres), probe_radius (m, > 0), probe_reflectance
 // (in (0, 1], default 1), tag_white_albedo (the printed white's diffuse
-// reflectance, in (0, 1], default 0.85). Throws ConfigError.
+// reflectance, in (0, 1], default 0.85), post_radius (m, in [0,
+// probe_radius), default 0: no post) and post_albedo (the post's diffuse
+// reflectance, in [0, 1], default 0: not a reference). Throws ConfigError.
 RigGeometry loadRigFile(const std::string& path);
 
 // Throws ConfigError when `rig` would not load back or cannot be written.

@@ -39,6 +39,12 @@ struct RigGeometry {
   // Diffuse reflectance of the tag's printed white (ibl/white_reference.hpp):
   // plain office paper under laser toner is about 0.8-0.9.
   double tag_white_albedo = 0.85;
+  // The ball's post (ibl/post_reference.hpp), where it stands on one: a
+  // vertical cylinder of this radius from the ground up to the ball, matte,
+  // of diffuse reflectance post_albedo. Painted so, it is a second diffuse
+  // reference beside the tag's white border. 0 (either): no post to read.
+  double post_radius_m = 0.0;
+  double post_albedo = 0.0;
 };
 
 // Rigid transform taking world points into the camera frame:

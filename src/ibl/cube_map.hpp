@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -31,6 +32,15 @@ CubeTexelCoord directionToCubeCoord(const glm::dvec3& direction);
 glm::dvec3 cubeTexelCenterDirection(int face, int x, int y, int face_size);
 // Solid angle (steradians) subtended by texel (x, y); sums to 4*pi over the cube.
 double cubeTexelSolidAngle(int x, int y, int face_size);
+
+// Whether texel `index` (y * n + x) of `face` is one the ball showed: a
+// validity list holds face * n^2 + y * n + x, and a texel the ball does not
+// show is < 0.5 there. A missing or mis-sized list means all are seen.
+inline bool texelSeen(const std::vector<float>* validity, int face, std::size_t index, int face_size) {
+  const std::size_t per_face = static_cast<std::size_t>(face_size) * face_size;
+  if (validity == nullptr || validity->size() != kCubeFaceCount * per_face) return true;
+  return (*validity)[static_cast<std::size_t>(face) * per_face + index] >= 0.5f;
+}
 
 // Linear-light RGB cube map on the CPU (the reference the GPU is checked
 // against). faces[f][y * face_size + x] is texel (x, y) of face f.

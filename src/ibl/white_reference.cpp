@@ -23,14 +23,6 @@ std::string percent(double fraction) {
   return out.str();
 }
 
-// As light_dome: validity holds face * n^2 + y * n + x; a texel the ball
-// does not show is < 0.5. A missing or mis-sized list means all are seen.
-bool isValid(const std::vector<float>* validity, int face, std::size_t index, int face_size) {
-  const std::size_t per_face = static_cast<std::size_t>(face_size) * face_size;
-  if (validity == nullptr || validity->size() != kCubeFaceCount * per_face) return true;
-  return (*validity)[static_cast<std::size_t>(face) * per_face + index] >= 0.5f;
-}
-
 }  // namespace
 
 WhiteRing tagWhiteRing(int width_at_border_cells, bool reversed_border, double tag_size_m) {
@@ -243,7 +235,7 @@ WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::v
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x) {
         const std::size_t index = static_cast<std::size_t>(y) * n + x;
-        if (!isValid(validity, face, index, n)) continue;
+        if (!texelSeen(validity, face, index, n)) continue;
         const glm::dvec3 omega = cubeTexelCenterDirection(face, x, y, n);
         const double solid_angle = cubeTexelSolidAngle(x, y, n);
         const glm::vec3& radiance = map.faces[face][index];
@@ -292,7 +284,7 @@ WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::v
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x) {
         const std::size_t index = static_cast<std::size_t>(y) * n + x;
-        if (!isValid(validity, face, index, n) || cubeTexelCenterDirection(face, x, y, n).z <= 0.0) continue;
+        if (!texelSeen(validity, face, index, n) || cubeTexelCenterDirection(face, x, y, n).z <= 0.0) continue;
         glm::vec3& radiance = map.faces[face][index];
         if (std::max({radiance.r, radiance.g, radiance.b}) >= clip_level || maskSays(clipped_mask, face, index, n))
           radiance += added;
@@ -319,7 +311,7 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x) {
         const std::size_t index = static_cast<std::size_t>(y) * n + x;
-        if (!isValid(validity, face, index, n)) continue;
+        if (!texelSeen(validity, face, index, n)) continue;
         const glm::vec3& seen = clipped_map.faces[face][index];
         const glm::vec3& real = true_map.faces[face][index];
         // Where the truth is beyond the clip, the 8-bit map's value there

@@ -20,6 +20,9 @@ SceneConfig defaultScene() {
   scene.rig.probe_center_w = {0.12, 0.0, 0.08};
   scene.rig.probe_radius_m = 0.03;
   scene.rig.probe_reflectance = 1.0;
+  // The pipeline is told the simulated post as it is (scene.post_*).
+  scene.rig.post_radius_m = scene.post_radius_m;
+  scene.rig.post_albedo = scene.post_albedo;
   return scene;
 }
 

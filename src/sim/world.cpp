@@ -624,6 +624,16 @@ struct World::Impl {
     return std::clamp(scene.floor_albedo * (1.0 + scene.floor_texture_contrast * texture), 0.0, 1.0);
   }
 
+  // The post's radiance where its normal points at world azimuth
+  // `azimuth_rad`: the frame's table, interpolated linearly.
+  static glm::dvec3 postRadiance(const FrameState& fs, double azimuth_rad) {
+    double x = azimuth_rad / (2 * kPi) * kPostAzimuthSteps;
+    x -= std::floor(x / kPostAzimuthSteps) * kPostAzimuthSteps;
+    const int i0 = static_cast<int>(x) % kPostAzimuthSteps;
+    const double f = x - std::floor(x);
+    return (1 - f) * fs.post_radiance[i0] + f * fs.post_radiance[(i0 + 1) % kPostAzimuthSteps];
+  }
+
   FrameState frameState(std::uint64_t frame) const {
     FrameState fs;
     fs.pose = path->pose(frame);
@@ -746,12 +756,7 @@ struct World::Impl {
       }
       case SceneObject::kPost: {
         glm::dvec3 p = fs.eye + t_best * dir;
-        double azimuth = std::atan2(p.y - rig.probe_center_w.y, p.x - rig.probe_center_w.x);
-        double x = azimuth / (2 * kPi) * kPostAzimuthSteps;
-        x -= std::floor(x / kPostAzimuthSteps) * kPostAzimuthSteps;
-        int i0 = static_cast<int>(x) % kPostAzimuthSteps;
-        double f = x - std::floor(x);
-        return (1 - f) * fs.post_radiance[i0] + f * fs.post_radiance[(i0 + 1) % kPostAzimuthSteps];
+        return postRadiance(fs, std::atan2(p.y - rig.probe_center_w.y, p.x - rig.probe_center_w.x));
       }
       case SceneObject::kProbe: {
         glm::dvec3 p = fs.eye + t_best * dir;
@@ -1342,6 +1347,13 @@ const SceneConfig& World::scene() const { return impl_->scene; }
 PoseCamFromWorld World::pose(std::uint64_t frame_index) const { return impl_->path->pose(frame_index); }
 double World::exposure() const { return impl_->exposure; }
 LightingState World::lighting(std::uint64_t frame_index) const { return impl_->lightingAt(frame_index); }
+glm::dvec3 World::postIrradiance(const glm::dvec3& normal_w, std::uint64_t frame_index) const {
+  const Impl& w = *impl_;
+  if (!(w.scene.post_albedo > 0.0)) return glm::dvec3(0.0);
+  return kPi * w.exposure * Impl::postRadiance(w.frameState(frame_index), std::atan2(normal_w.y, normal_w.x)) /
+         w.scene.post_albedo;
+}
+
 glm::dvec3 World::groundIrradianceUp(std::uint64_t frame_index) const {
   return impl_->irradianceUp(impl_->lightingAt(frame_index));
 }

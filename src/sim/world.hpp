@@ -80,6 +80,10 @@ class World {
   // Radiance the ball centre sees along dir_w (unit): what the reflection cube
   // map should show, divided by nothing (the reflectance is already undone).
   RadianceTruth radiance(const glm::dvec3& dir_w, std::uint64_t frame_index) const;
+  // The irradiance the post is lit with where its (horizontal) normal is
+  // normal_w, in camera linear units: what a reading of the post should
+  // find (0 when post_albedo is 0).
+  glm::dvec3 postIrradiance(const glm::dvec3& normal_w, std::uint64_t frame_index) const;
   // Upward-normal environment irradiance that lights the ground, scene units.
   glm::dvec3 groundIrradianceUp(std::uint64_t frame_index) const;
 

@@ -646,7 +646,9 @@ namespace {
 // is as good as the sun's texel placement (a texel of 64^2: under 1.5 deg).
 // --no-white-ref leaves the 8-bit map; a border that clips or reads darker
 // than the ball (a grey print where rig.yaml says white) is not used, says
-// why, and the run still succeeds.
+// why, and the run still succeeds. The simulated rig's post (rig.yaml
+// post_radius, post_albedo) is read beside the border; --no-post-ref leaves
+// the border alone, and a post darker than rig.yaml says is not used.
 class AnalyzeWhiteBorder : public Analyze {
  protected:
   struct Outcome {
@@ -682,6 +684,35 @@ TEST_F(AnalyzeWhiteBorder, RestoresTheClippedSunAndSaysWhyWhenItCannot) {
   const sim::SceneConfig sun_sky = sim::defaultScene();
   {
     const Outcome used = analyze(sun_sky);
+    const nlohmann::json& hdr = used.analysis["hdr"];
+    ASSERT_EQ(hdr["method"], "white_border_and_post") << hdr.dump(2);
+    const nlohmann::json& post = hdr["white_border"]["post"];
+    EXPECT_EQ(post["status"], "measured") << post.dump(2);
+    EXPECT_EQ(post["fit"]["status"], "refined") << post.dump(2);
+    // The post's side toward the camera, read in bins of 15 degrees: a
+    // 6 mm post 0.5 m away shows about 90 degrees of it wholly in pixels.
+    EXPECT_GE(post["references"].size(), 3u) << post.dump(2);
+    for (const auto& reference : post["references"]) EXPECT_NEAR(jsonVec3(reference["normal"]).z, 0.0, 1e-9);
+    EXPECT_LE(post["fit"]["rms_relative_after"].get<double>(), post["fit"]["rms_relative_before"].get<double>() + 1e-9);
+    EXPECT_LE(used.irradiance_error, 0.05);
+    const Outcome border_only = analyze(sun_sky, " --no-post-ref");
+    ASSERT_EQ(border_only.analysis["hdr"]["method"], "white_border");
+    EXPECT_FALSE(border_only.analysis["hdr"]["white_border"].contains("post"));
+  }
+  {
+    // The post is painted darker (0.1) than rig.yaml says (0.5): it reads
+    // less light than the ball's unclipped part shows there. Not used,
+    // said; the border's share stands.
+    sim::SceneConfig dark_post = sun_sky;
+    dark_post.post_albedo = 0.1;
+    const Outcome refused = analyze(dark_post);
+    EXPECT_EQ(refused.analysis["hdr"]["method"], "white_border");
+    EXPECT_EQ(refused.analysis["hdr"]["white_border"]["post"]["fit"]["status"], "inconsistent");
+    EXPECT_EQ(testing::countOccurrences(refused.stderr_text, "the ball's post"), 1u) << refused.stderr_text;
+    EXPECT_LE(refused.irradiance_error, 0.05);
+  }
+  {
+    const Outcome used = analyze(sun_sky, " --no-post-ref");
     const nlohmann::json& hdr = used.analysis["hdr"];
     ASSERT_EQ(hdr["method"], "white_border") << hdr.dump(2);
     EXPECT_EQ(hdr["white_border"]["status"], "measured");

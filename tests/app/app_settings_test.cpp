@@ -65,6 +65,7 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.lights.refit_when_light_changes, defaults.lights.refit_when_light_changes);
   EXPECT_DOUBLE_EQ(from_file.lights.refit_change_fraction, defaults.lights.refit_change_fraction);
   EXPECT_EQ(from_file.lights.white_reference, defaults.lights.white_reference);
+  EXPECT_EQ(from_file.lights.post_reference, defaults.lights.post_reference);
   EXPECT_DOUBLE_EQ(from_file.lights.bracket_step_stops, defaults.lights.bracket_step_stops);
   EXPECT_DOUBLE_EQ(from_file.lights.bracket_max_stops, defaults.lights.bracket_max_stops);
   EXPECT_EQ(from_file.button.gpio.chip, defaults.button.gpio.chip);
@@ -81,6 +82,7 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_DOUBLE_EQ(from_file.probe_refinement.weight, defaults.probe_refinement.weight);
   EXPECT_EQ(from_file.sim.ball_offset_m, defaults.sim.ball_offset_m);
   EXPECT_DOUBLE_EQ(from_file.sim.min_exposure_us, defaults.sim.min_exposure_us);
+  EXPECT_EQ(from_file.sim.min_exposure_reported, defaults.sim.min_exposure_reported);
   EXPECT_EQ(from_file.save_every, defaults.save_every);
   EXPECT_EQ(from_file.gpu_finish, defaults.gpu_finish);
 }

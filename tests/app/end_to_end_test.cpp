@@ -614,8 +614,11 @@ namespace {
 // in the fit's frame says the ground gets several times the light the 8-bit
 // ball shows (the default world is the studio, whose soft boxes clip); the shortfall goes to the clipped texels
 // and from there into the clipped lights the object is shaded with, whose
-// upward irradiance is that shortfall. The same from YUV frames (the
-// border's pixels decoded on the CPU). Off, the report has no white_border.
+// upward irradiance is that shortfall. The simulated rig's post, read
+// beside it, divides that light between the soft boxes (the fit keeps the
+// border's reading among the ones it matches). The same from YUV frames
+// (the border's and the post's pixels decoded on the CPU). Off, the report
+// has no white_border.
 TEST_F(EndToEnd, WhiteBorderRestoresTheClippedSunAtTheFitFromRgbAndYuvFrames) {
   auto green = [](const nlohmann::json& rgb) { return rgb[1].get<double>(); };
   for (const std::string format : {"rgb", "yuv420"}) {
@@ -632,6 +635,10 @@ TEST_F(EndToEnd, WhiteBorderRestoresTheClippedSunAtTheFitFromRgbAndYuvFrames) {
     EXPECT_EQ(border["border"], "measured") << format;
     EXPECT_EQ(border["correction"], "corrected") << border.dump();
     ASSERT_GE(border["clipped_lights"].size(), 1u) << border.dump();
+    ASSERT_TRUE(border.contains("post")) << border.dump();
+    EXPECT_EQ(border["post"]["status"], "measured") << border["post"].dump(2);
+    EXPECT_EQ(border["post"]["fit"]["status"], "refined") << border["post"].dump(2);
+    EXPECT_EQ(report["counters"].value("post_measured", 0), report["counters"].value("white_border_corrected", -1));
     const double shortfall = green(border["border_irradiance_rgb"]) - green(border["ball_irradiance_rgb"]);
     // The soft boxes hold most of the light: the clipped ball misses it.
     EXPECT_GT(shortfall, green(border["ball_irradiance_rgb"])) << border.dump();

@@ -318,12 +318,14 @@ std::vector<BadField> badFields() {
   out.push_back({"rig", rig_yaml("0.1", "[0.12, 0.0, 0.08]", "0.03", "VALUE"), "probe_reflectance"});
   out.push_back({"rig", rig_yaml("0.1", "[0.12, 0.0, 0.08]", "0.03", "0.7") + "tag_white_albedo: VALUE\n",
                  "tag_white_albedo"});
+  for (const std::string field : {"post_radius", "post_albedo"})
+    out.push_back({"rig", rig_yaml("0.1", "[0.12, 0.0, 0.08]", "0.03", "0.7") + field + ": VALUE\n", field});
   return out;
 }
 
 TEST_F(Stress, NanOrInfInAnyFloatFieldIsOneLineAndExit2) {
   const std::vector<BadField> fields = badFields();
-  ASSERT_EQ(fields.size(), 22u + 4u + 3u + 6u + 14u + 7u);
+  ASSERT_EQ(fields.size(), 22u + 4u + 3u + 6u + 14u + 9u);
   for (const BadField& bad : fields) {
     for (const char* value : {".nan", ".inf", "-.inf"}) {
       std::string yaml = bad.yaml;

@@ -205,9 +205,11 @@ TEST(RigFile, SaveThenLoadRoundTrips) {
   original.tag_family = "tagStandard41h12";
   original.tag_id = 1234;
   original.tag_size_m = 0.1234567;
-  original.probe_center_w = {0.111111111, -0.0987654321, 0.0312345};
+  original.probe_center_w = {0.111111111, -0.0987654321, 0.0812345};
   original.probe_radius_m = 0.0312345;
   original.probe_reflectance = 0.72;
+  original.post_radius_m = 0.0031234;
+  original.post_albedo = 0.456;
   std::string path = folder.file("rig.yaml");
   config::saveRigFile(path, original);
   RigGeometry loaded = config::loadRigFile(path);
@@ -218,6 +220,8 @@ TEST(RigFile, SaveThenLoadRoundTrips) {
   EXPECT_EQ(loaded.probe_center_w, original.probe_center_w);
   EXPECT_EQ(loaded.probe_radius_m, original.probe_radius_m);
   EXPECT_EQ(loaded.probe_reflectance, original.probe_reflectance);
+  EXPECT_EQ(loaded.post_radius_m, original.post_radius_m);
+  EXPECT_EQ(loaded.post_albedo, original.post_albedo);
 }
 
 TEST(RigFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
@@ -253,6 +257,21 @@ TEST(RigFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
   expectConfigError(load(reflectance), reflectance, "probe_reflectance", "(0, 1]");
   std::string typo = folder.write("typo.yaml", std::string(kGoodRig) + "probe_reflectence: 0.7\n");
   expectConfigError(load(typo), typo, "probe_reflectence", "unknown field");
+  // A post no thinner than the ball, or under a ball that rests on the
+  // ground (kGoodRig's centre is at z = probe_radius), or of an albedo past 1.
+  auto raisedWith = [&](const std::string& name, const std::string& extra) {
+    std::string text = kGoodRig;
+    text.replace(text.find("[0.1, -0.02, 0.03]"), 18, "[0.1, -0.02, 0.08]");
+    return folder.write(name, text + extra);
+  };
+  const std::string raised = raisedWith("raised.yaml", "");
+  std::string thick = raisedWith("thick.yaml", "post_radius: 0.03\n");
+  expectConfigError(load(thick), thick, "post_radius", "[0, probe_radius)");
+  std::string grounded = folder.write("grounded.yaml", std::string(kGoodRig) + "post_radius: 0.003\n");
+  expectConfigError(load(grounded), grounded, "post_radius", "on the ground");
+  std::string bright = folder.write("bright.yaml", std::string(kGoodRig) + "post_albedo: 1.5\n");
+  expectConfigError(load(bright), bright, "post_albedo", "[0, 1]");
+  EXPECT_EQ(config::loadRigFile(raised).post_radius_m, 0.0) << "no post unless one is described";
   std::string twice = folder.write("twice.yaml", std::string(kGoodRig) + "tag_id: 8\n");
   expectConfigError(load(twice), twice, "tag_id", "more than once");
   std::string not_a_map = folder.write("not_a_map.yaml", "- 1\n- 2\n");
