@@ -24,10 +24,11 @@ rows = {}
 for path in sorted(glob.glob(sys.argv[1] + '/*/report.json')):
     env, mode, _ = path.split('/')[-2].rsplit('-', 2)
     report = json.load(open(path))
-    row = rows.setdefault((env, mode), {k: [] for k in ('wall', 'frames', 'merge', 'fit', 'rescale', 'render', 'detect')})
+    row = rows.setdefault((env, mode), {k: [] for k in ('wall', 'own', 'frames', 'merge', 'fit', 'rescale', 'render', 'detect')})
     stages = report['stages']
     if 'hdr' in report:
         row['wall'].append(report['hdr']['wall_ms'])
+        row['own'].append(report['hdr']['own_ms'])
         row['frames'].append(report['hdr']['camera_frames'])
     for key, stage in (('merge', 'bracket_merge'), ('fit', 'fit_lights'), ('rescale', 'clipped_rescale'),
                        ('render', 'render'), ('detect', 'detect_pose')):
@@ -35,7 +36,7 @@ for path in sorted(glob.glob(sys.argv[1] + '/*/report.json')):
             row[key].append(stages[stage]['median_ms'])
 median = lambda v: '%.1f' % statistics.median(v) if v else '-'
 for (env, mode), row in sorted(rows.items()):
-    print(f"{env:20s} bracket {mode:3s}: hdr.wall_ms {median(row['wall'])} ({median(row['frames'])} camera frames), "
+    print(f"{env:20s} bracket {mode:3s}: hdr.wall_ms {median(row['wall'])} (own {median(row['own'])}; {median(row['frames'])} camera frames), "
           f"bracket_merge {median(row['merge'])} ms, fit_lights {median(row['fit'])} ms, "
           f"clipped_rescale {median(row['rescale'])} ms, render {median(row['render'])} ms, detect_pose {median(row['detect'])} ms")
 PY

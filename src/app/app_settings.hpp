@@ -124,6 +124,10 @@ struct SimConfig {
   // ExposureTime control has a minimum; a source may not tell it), so that
   // a bracket plans its ladder to it rather than finding it.
   bool min_exposure_reported = true;
+  // Buffers in the simulated camera's pool: an exposure change reaches the
+  // frames from this many after the newest one handed out (its latency, as
+  // a real pipeline's queued requests give one).
+  int camera_buffers = 3;
 };
 
 struct ButtonConfig {

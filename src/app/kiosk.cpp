@@ -346,7 +346,7 @@ class Kiosk {
     camera_options.failed_restarts = settings.sim.camera_lost_restarts;
     camera_options.min_exposure_us = settings.sim.min_exposure_us;
     camera_options.min_exposure_reported = settings.sim.min_exposure_reported;
-    source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), 3, camera_options);
+    source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), settings.sim.camera_buffers, camera_options);
     return 0;
   }
 
@@ -431,7 +431,8 @@ class Kiosk {
     source_->stop();
     exposure_locked_ = false;  // a new stream starts with AE running
     if (bracket_) report_.count("brackets_cut_by_camera_loss");  // whileCameraLost finishes it
-    settling_.reset();  // a new stream starts at its own exposure
+    settling_.reset();      // a new stream starts at its own exposure
+    early_ladder_.reset();  // ... and asks for a ladder afresh
     reconnect_.onLost(monotonicNowS());
   }
 
@@ -536,6 +537,12 @@ class Kiosk {
     // While an exposure bracket is taken, frames are its, not the picture's;
     // after it, frames still in flight at its exposures are not shown either.
     if (bracket_) return bracketFrame(frame, frame_number);
+    if (early_ladder_ && rungArrivedEarly(frame)) {
+      // The camera is quicker than the lead assumed: this frame is darker
+      // than the fit's should be. Called off; the fit asks again.
+      cancelEarlyLadder("bracket_early_ladders_too_early");
+      bracket_lead_frames_ = 0;
+    }
     if (settling_ && !exposureSettled(frame))
       return showKeptFrame(frame_number, "Recalibrating lights: exposure returning");
     std::string error;
@@ -610,14 +617,18 @@ class Kiosk {
     // The state machine counts frames whose ball the maps hold: updated, or
     // skipped because the image matched the maps already.
     const bool maps_current = decision.update || decision.skip == MapSkipReason::kImageUnchanged;
-    switch (machine_.onFrame(maps_current)) {
+    const FrameOutcome outcome = machine_.onFrame(maps_current);
+    if (outcome == FrameOutcome::kNothing) leadTheLadder(frame, frame_number, track.found ? &outline : nullptr);
+    switch (outcome) {
       case FrameOutcome::kFitLights:
         // With a bracket to take, the fit waits for its frames.
         if (track.found && startBracket(frame, frame_number, view, outline)) break;
+        if (early_ladder_) cancelEarlyLadder("bracket_early_ladders_unused");
         if (const int failed = fitLights(frame_number, fitInputsOf(frame, track.found ? &view : nullptr)); failed != 0)
           return failed;
         break;
       case FrameOutcome::kCalibrationFailed:
+        if (early_ladder_) cancelEarlyLadder("bracket_early_ladders_unused");
         report_.count("calibrations_failed");
         log_ << logPrefix(LogPriority::kWarning) << "probelight: frame " << frame_number << ": recalibration gave up (ball not seen in "
              << machine_.policy().max_frames << " frames); previous lighting kept\n";
@@ -932,6 +943,8 @@ class Kiosk {
     std::uint64_t started_frame = 0;
     double started_s = 0.0;
     double own_s = 0.0;  // probelight's own work on the bracket's frames (the rest of the wall time is the camera's)
+    int lead_frames = 0;  // the ladder was asked for this many frames before the fit frame
+    int latency_frames = -1;  // from the request to its first rung (-1: none came)
   };
   // A requested exposure shows in a frame's metadata within a few frames
   // (libcamera queues a handful of requests ahead, and sensors apply
@@ -984,6 +997,56 @@ class Kiosk {
     }
   }
 
+  // A recalibration whose ball clips asks for its ladder a few frames
+  // before the fit frame (bracket_lead_frames_: the camera's latency less
+  // one, learnt from the last bracket; 2 to begin with, as libcamera queues
+  // requests ahead and sensors apply exposure two frames late), so that the
+  // latency passes while the recalibration still counts its good frames at
+  // the normal exposure and the rungs follow the fit frame at once.
+  struct EarlyLadder {
+    FrameSource::ManualExposure base;
+    std::vector<double> ladder_ev;
+    bool ladder_at_shortest = false;
+    std::uint64_t requested_frame = 0;
+  };
+  static constexpr int kBracketMaxLeadFrames = 6;
+
+  void leadTheLadder(const FrameBuffer& frame, std::uint64_t frame_number, const ibl::ProbeOutline* outline) {
+    const LightsConfig& config = inputs_.settings.lights;
+    const int needed = machine_.policy().good_frames_needed;
+    const int lead = std::min(bracket_lead_frames_, needed - 1);
+    if (early_ladder_) {
+      // The count started over (the ball was lost): not this time.
+      if (machine_.state() != AppState::kRecalibrating || machine_.goodFramesSoFar() < needed - lead)
+        cancelEarlyLadder("bracket_early_ladders_unused");
+      return;
+    }
+    if (lead <= 0 || machine_.state() != AppState::kRecalibrating || machine_.goodFramesSoFar() != needed - lead ||
+        !outline || !outline->valid || !(config.bracket_max_stops > 0.0) || !(frame.metadata.exposure_us > 0.0))
+      return;
+    const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
+    if (ballPixelCodes(frameRgb(frame), *outline, merge).clipped == 0) return;
+    PendingBracket plan;
+    plan.base = {frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0};
+    std::vector<FrameSource::ManualExposure> exposures;
+    planLadder(plan, exposures);
+    if (exposures.empty() || !source_->setExposureLadder(exposures)) return;  // the fit will say why
+    early_ladder_ = EarlyLadder{plan.base, plan.ladder_ev, plan.ladder_at_shortest, frame_number};
+    report_.count("bracket_early_ladders");
+  }
+
+  bool rungArrivedEarly(const FrameBuffer& frame) const {
+    const double ev = stopsFrom(frame, early_ladder_->base);
+    return std::isfinite(ev) && ev < -kBracketEvMatchStops;
+  }
+
+  void cancelEarlyLadder(const char* counter) {
+    source_->setExposureLadder({});
+    settling_ = Settling{early_ladder_->base, 0};
+    early_ladder_.reset();
+    report_.count(counter);
+  }
+
   bool startBracket(const FrameBuffer& frame, std::uint64_t frame_number, const ibl::MirrorBallView& view,
                     const ibl::ProbeOutline& outline) {
     const LightsConfig& config = inputs_.settings.lights;
@@ -1000,6 +1063,20 @@ class Kiosk {
       return false;
     }
     bracket.base = {frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0};
+    if (early_ladder_) {
+      // Asked for a few frames ago: its rungs are on their way. Their EVs
+      // from this frame's exposure (the same, with AE locked).
+      const double shift = std::log2(early_ladder_->base.exposure_us * early_ladder_->base.analogue_gain /
+                                     (bracket.base.exposure_us * bracket.base.analogue_gain));
+      bracket.ladder_ev = early_ladder_->ladder_ev;
+      for (double& ev : bracket.ladder_ev) ev += shift;
+      bracket.ladder_at_shortest = early_ladder_->ladder_at_shortest;
+      bracket.lead_frames = static_cast<int>(frame_number - early_ladder_->requested_frame);
+      early_ladder_.reset();
+      report_.count("brackets_started");
+      bracket_ = std::move(bracket);
+      return true;
+    }
     std::vector<FrameSource::ManualExposure> exposures;
     planLadder(bracket, exposures);
     if (exposures.empty()) {
@@ -1060,6 +1137,12 @@ class Kiosk {
     const double last_ev = bracket.frames.empty() ? 0.0 : bracket.frames.back().ev;
     bool done = false;
     if (std::isfinite(ev) && ev <= last_ev - kBracketNewFrameStops) {
+      // The camera's latency, learnt from its first rung: later brackets ask
+      // for their ladder that many frames (less one) before the fit.
+      if (bracket.frames.empty()) {
+        bracket.latency_frames = static_cast<int>(frame_number - bracket.started_frame) + bracket.lead_frames;
+        bracket_lead_frames_ = std::clamp(bracket.latency_frames - 1, 0, kBracketMaxLeadFrames);
+      }
       BracketCandidate candidate{"camera frame " + std::to_string(frame_number), ev, frameRgb(frame)};
       const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
       const bool still_clips = ballPixelCodes(candidate.rgb, bracket.outline, merge).clipped > 0;
@@ -1121,6 +1204,8 @@ class Kiosk {
                             {"still_clipped_sr", merged.still_clipped_sr},
                             {"camera_frames", frame_number - bracket.started_frame},
                             {"ladder_ev", bracket.ladder_ev},
+                            {"ladder_asked_frames_before_fit", bracket.lead_frames},
+                            {"exposure_latency_frames", bracket.latency_frames},
                             // From the fit frame to the merged map: the camera's frames plus the merge.
                             {"wall_ms", 1000.0 * (monotonicNowS() - bracket.started_s)},
                             // Of that, probelight's own work: each bracket frame's checks and the kept
@@ -1511,6 +1596,8 @@ class Kiosk {
   double last_exposure_us_ = 0.0, last_analogue_gain_ = 0.0;
   nlohmann::json exposure_at_last_fit_;  // null until a fit
   std::optional<PendingBracket> bracket_;  // an exposure bracket being taken
+  std::optional<EarlyLadder> early_ladder_;  // a ladder asked for ahead of its fit frame
+  int bracket_lead_frames_ = 2;
   // The status the display's frame was last drawn with as a kept frame
   // (reset by every drawing): a kept frame with the same status is shown
   // again without drawing it.

@@ -672,11 +672,12 @@ namespace {
 // longer clips, merges them, and fits the lights from the HDR map: the
 // dominant light within the 5 deg of the simulator's sun. The same
 // from NV12 frames. The whole ladder is asked for at once, so the camera's
-// latency is paid once: the simulated camera applies a change from its
-// pool's length (3) after the frame in hand, so the bracket's first frame is
-// the fit frame's third successor and the others follow one a frame (asked
-// for one rung at a time, each rung would wait that latency again: 9
-// frames instead of 5 in this world).
+// latency is paid once (asked for one rung at a time, each rung would wait
+// it again: 9 frames instead of 5 in this world), and it is asked for two
+// frames before the fit frame, while the recalibration still counts its
+// good frames: the simulated camera applies a change from its pool's
+// length (3) after the frame in hand, so the first rung is the fit frame's
+// very next frame, and the bracket costs the fit one frame a rung.
 TEST_F(EndToEnd, RecalibrationBracketsTheBallAndFindsTheSun) {
   const sim::World world(sim::defaultScene());
   glm::dvec3 sun(0.0, 0.0, 1.0);
@@ -715,7 +716,9 @@ TEST_F(EndToEnd, RecalibrationBracketsTheBallAndFindsTheSun) {
       }
     }
     EXPECT_GE(used, 1);
-    EXPECT_EQ(hdr["camera_frames"].get<int>(), 2 + static_cast<int>(hdr["frames"].size())) << hdr.dump(2);
+    EXPECT_EQ(hdr["ladder_asked_frames_before_fit"].get<int>(), 2) << hdr.dump(2);
+    EXPECT_EQ(hdr["exposure_latency_frames"].get<int>(), 3) << hdr.dump(2);
+    EXPECT_EQ(hdr["camera_frames"].get<int>(), static_cast<int>(hdr["frames"].size())) << hdr.dump(2);
     EXPECT_LE(hdr["own_ms"].get<double>(), hdr["wall_ms"].get<double>());
     EXPECT_GE(hdr["clipped_lights"].size(), 1u);
     const auto& d = report["lights"]["dominant_light"]["direction"];
@@ -801,20 +804,53 @@ TEST_F(EndToEnd, ASensorsShortestExposureEndsTheBracketWithWhatItGave) {
     EXPECT_TRUE(last["used"].get<bool>()) << last.dump();
     EXPECT_NEAR(last["ev"].get<double>(), std::log2(100.0 / 10000.0), 1e-6);
     // Told, the ladder's last rung is that exposure and the bracket ends on
-    // it; untold, it asks down to EV -12 and waits three frames more.
+    // it; untold, it asks down to EV -12 and waits three frames more. (The
+    // rungs follow the fit frame at once: see above.)
     if (reported) {
       ASSERT_EQ(hdr["ladder_ev"].size(), 3u) << hdr.dump(2);
       EXPECT_NEAR(hdr["ladder_ev"][2].get<double>(), std::log2(100.0 / 10000.0), 1e-9);
-      EXPECT_EQ(hdr["camera_frames"].get<int>(), 2 + 3);
+      EXPECT_EQ(hdr["camera_frames"].get<int>(), 3);
     } else {
       EXPECT_EQ(hdr["ladder_ev"].size(), 4u) << hdr.dump(2);
-      EXPECT_EQ(hdr["camera_frames"].get<int>(), 2 + 3 + 3);
+      EXPECT_EQ(hdr["camera_frames"].get<int>(), 3 + 3);
     }
     // The sun needs EV -12 here: at -6.6 some of it still clips, and the
     // status says so.
     EXPECT_GT(hdr["still_clipped_sr"].get<double>(), 0.0);
     EXPECT_NE(hdr["status"].get<std::string>().find("clipped even in the shortest"), std::string::npos) << hdr.dump();
   }
+}
+
+}  // namespace
+}  // namespace probelight
+
+namespace probelight {
+namespace {
+
+// A camera quicker than the kiosk assumes (2 frames from request to frame,
+// sim.camera_buffers 2, where the early ladder is asked for 2 frames ahead
+// of the fit): its first rung comes before the fit frame. That frame is not
+// used for the maps, the early ladder is called off, and the fit, once the
+// exposure is back, asks for the ladder itself and learns the latency. The
+// lights are fitted from the bracket all the same.
+TEST_F(EndToEnd, ACameraQuickerThanTheLeadGetsItsLadderAtTheFit) {
+  const fs::path config = dir_ / "quick.yaml";
+  std::ofstream(config) << "sim:\n  env: sun_sky\n  camera_buffers: 2\n";
+  const fs::path out = dir_ / "out";
+  const CommandResult result =
+      run("run --frames 30 --save-every 0 --path static --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  EXPECT_EQ(report["counters"].value("bracket_early_ladders", 0), 1) << report["counters"].dump();
+  EXPECT_EQ(report["counters"].value("bracket_early_ladders_too_early", 0), 1) << report["counters"].dump();
+  EXPECT_EQ(report["counters"]["brackets_merged"], 1) << report["counters"].dump();
+  const nlohmann::json& hdr = report["hdr"];
+  ASSERT_EQ(hdr["method"], "bracket") << hdr.dump(2);
+  EXPECT_EQ(hdr["ladder_asked_frames_before_fit"].get<int>(), 0);
+  EXPECT_EQ(hdr["exposure_latency_frames"].get<int>(), 2);
+  EXPECT_EQ(hdr["camera_frames"].get<int>(), 1 + static_cast<int>(hdr["frames"].size())) << hdr.dump(2);
+  EXPECT_EQ(hdr["still_clipped_sr"].get<double>(), 0.0);
+  EXPECT_EQ(report["frames"], 30);
 }
 
 }  // namespace
