@@ -80,7 +80,7 @@ void recordSeries(nlohmann::json& out, const std::string& name, const SampleSeri
                {"samples", series.count()}};
 }
 
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+using ibl::luminance;
 
 // Status text drawn over the frame with OpenCV's Hershey font, re-rendered
 // only when the text changes.

@@ -2,7 +2,12 @@
 // lighting maths happens in linear light.
 #pragma once
 
+#include <glm/glm.hpp>
+
 namespace probelight::ibl {
+
+// Relative luminance of linear Rec.709 / sRGB primaries (ITU-R BT.709).
+inline double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
 
 // IEC 61966-2-1 piecewise sRGB curve, values in [0, 1].
 double srgbToLinear(double encoded);

@@ -6,13 +6,13 @@
 #include <numbers>
 #include <queue>
 
+#include "ibl/color_transfer.hpp"
+
 namespace probelight::ibl {
 
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
 
 bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <sstream>
 
@@ -12,17 +13,7 @@
 namespace probelight::ibl {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
-
-std::string percent(double fraction) {
-  std::ostringstream out;
-  out.setf(std::ios::fixed);
-  out.precision(0);
-  out << 100.0 * fraction << "%";
-  return out.str();
-}
+constexpr double kPi = std::numbers::pi;
 
 // Nearest hit (t > 0) of origin + t dir with the vertical cylinder of
 // `radius` about axis_xy, between heights z_low and z_high.
@@ -262,7 +253,7 @@ DiffuseFit fitClippedRegionsToReferences(CubeMapRGB& corrected, const CubeMapRGB
       facing << "(" << references[j].normal_w.x << ", " << references[j].normal_w.y << ", " << references[j].normal_w.z
              << ")";
       fit.message = "a reference facing " + facing.str() + " reads only " +
-                    percent(luminance(references[j].irradiance_rgb) / std::max(1e-30, luminance(base[j]))) +
+                    percentText(luminance(references[j].irradiance_rgb) / std::max(1e-30, luminance(base[j]))) +
                     " of the light the ball's unclipped part shows there (in shade, not matte, or its albedo set "
                     "too high): not used";
       fit.region_scale_rgb.assign(columns, glm::dvec3(1.0));
@@ -324,8 +315,8 @@ DiffuseFit fitClippedRegionsToReferences(CubeMapRGB& corrected, const CubeMapRGB
   fit.status = DiffuseFitStatus::kRefined;
   fit.message = "the clipped light divided between " + std::to_string(columns) + " regions by " +
                 std::to_string(rows) + " diffuse readings: they disagree with the map by " +
-                percent(fit.rms_relative_before) + " (rms) with the border's equal share, " +
-                percent(fit.rms_relative_after) + " after";
+                percentText(fit.rms_relative_before) + " (rms) with the border's equal share, " +
+                percentText(fit.rms_relative_after) + " after";
   return fit;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 #include "ibl/camera_projection.hpp"
@@ -11,19 +12,17 @@
 namespace probelight::ibl {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kPi = std::numbers::pi;
 
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+}  // namespace
 
-std::string percent(double fraction) {
+std::string percentText(double fraction) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
   out.precision(0);
   out << 100.0 * fraction << "%";
   return out.str();
 }
-
-}  // namespace
 
 WhiteRing tagWhiteRing(int width_at_border_cells, bool reversed_border, double tag_size_m) {
   const double half = tag_size_m / 2.0;
@@ -261,13 +260,13 @@ WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::v
   const double ratio = luminance(result.border_irradiance_rgb) / std::max(1e-30, luminance(e_map));
   if (cosine_weight_clipped <= 0.0) {
     result.status = WhiteReferenceStatus::kNothingClipped;
-    result.message = "nothing clipped above the horizon; the border reads " + percent(ratio) +
+    result.message = "nothing clipped above the horizon; the border reads " + percentText(ratio) +
                      " of the ball's irradiance";
     return result;
   }
   if (ratio < 1.0 - kBorderDarkerTolerance) {
     result.status = WhiteReferenceStatus::kBorderDarker;
-    result.message = "the border reads only " + percent(ratio) +
+    result.message = "the border reads only " + percentText(ratio) +
                      " of the irradiance the ball shows (in shadow, printed without its white margin, or "
                      "tag_white_albedo too high): not used";
     return result;
@@ -275,7 +274,7 @@ WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::v
   const glm::dvec3 shortfall = glm::max(result.border_irradiance_rgb - e_map, glm::dvec3(0.0));
   if (luminance(shortfall) <= 0.0) {
     result.status = WhiteReferenceStatus::kNoShortfall;
-    result.message = "the border reads " + percent(ratio) + " of the ball's irradiance: nothing missing";
+    result.message = "the border reads " + percentText(ratio) + " of the ball's irradiance: nothing missing";
     return result;
   }
   result.added_radiance_rgb = shortfall / cosine_weight_clipped;
@@ -290,8 +289,8 @@ WhiteReferenceResult correctClippedWithWhiteBorder(CubeMapRGB& map, const std::v
           radiance += added;
       }
   result.status = WhiteReferenceStatus::kCorrected;
-  result.message = "the border reads " + percent(ratio) + " of the ball's irradiance; the rest given to " +
-                   percent(result.clipped_upper_sr / (2.0 * kPi)) + " of the sky that clipped";
+  result.message = "the border reads " + percentText(ratio) + " of the ball's irradiance; the rest given to " +
+                   percentText(result.clipped_upper_sr / (2.0 * kPi)) + " of the sky that clipped";
   return result;
 }
 

@@ -62,6 +62,9 @@ struct WhiteBorderSettings {
   double shadow_fraction = 0.8;
 };
 
+// "42%": a fraction as a whole percentage, for messages.
+std::string percentText(double fraction);
+
 enum class WhiteBorderStatus { kMeasured, kNotInView, kTooSmall, kClipped, kTooDark };
 const char* toString(WhiteBorderStatus status);
 

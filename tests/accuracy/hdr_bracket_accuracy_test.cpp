@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "accuracy_test_support.hpp"
 #include "app/analyze.hpp"
 #include "ibl/hdr_bracket.hpp"
 #include "ibl/irradiance.hpp"
@@ -139,21 +140,14 @@ TEST(HdrBracketAccuracy, IrradianceAndDominantLightAgainstTheHdrTruth) {
   int counted = 0, blind = 0;
   for (const std::string& environment : environments) {
     for (const ViewCase& view : views) {
-      sim::SceneConfig scene = sim::defaultScene();
-      scene.environment = environment;
-      scene.camera_path.name = "static";
-      scene.camera_path.distance_m = view.distance_m;
-      scene.camera_path.elevation_deg = view.elevation_deg;
-      scene.camera_path.azimuth_start_deg = view.azimuth_deg;
+      const sim::SceneConfig scene =
+          testing::staticView(environment, view.distance_m, view.elevation_deg, view.azimuth_deg);
       const sim::World world(scene);
       ImageRGB8 reference;
       FrameTruth truth;
       world.render(0, reference, truth);
       ASSERT_TRUE(truth.probe_fully_visible && truth.tag_fully_visible) << environment << " " << view.name;
-      std::vector<std::uint8_t> luma;
-      lumaFromRgb(reference, luma);
-      tracking::TagTracker tracker(tracking::TagDetectorSettings{}, scene.rig, scene.camera);
-      const tracking::TagTrackResult track = tracker.track(luma.data(), reference.width, reference.height, reference.width);
+      const tracking::TagTrackResult track = testing::trackRendered(scene, reference);
       ASSERT_TRUE(track.found) << track.status;
       const ibl::MirrorBallView ball{scene.camera, track.pose, scene.rig.probe_center_w, scene.rig.probe_radius_m};
       const ibl::ProbeOutline outline = ibl::computeProbeOutline(ball);

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "accuracy_test_support.hpp"
 #include "core/types.hpp"
 #include "ibl/color_transfer.hpp"
 #include "ibl/post_reference.hpp"
@@ -39,20 +40,13 @@ TEST(PostReference, ReadsTheIrradianceTheSimulatorLitThePostWith) {
   int readings = 0;
   for (const std::string& environment : worlds)
     for (const View& view : views) {
-      sim::SceneConfig scene = sim::defaultScene();
-      scene.environment = environment;
-      scene.camera_path.name = "static";
-      scene.camera_path.distance_m = view.distance_m;
-      scene.camera_path.elevation_deg = view.elevation_deg;
-      scene.camera_path.azimuth_start_deg = view.azimuth_deg;
+      const sim::SceneConfig scene =
+          testing::staticView(environment, view.distance_m, view.elevation_deg, view.azimuth_deg);
       const sim::World world(scene);
       ImageRGB8 frame;
       FrameTruth truth;
       world.render(0, frame, truth);
-      std::vector<std::uint8_t> luma;
-      lumaFromRgb(frame, luma);
-      tracking::TagTracker tracker(tracking::TagDetectorSettings{}, scene.rig, scene.camera);
-      const tracking::TagTrackResult track = tracker.track(luma.data(), frame.width, frame.height, frame.width);
+      const tracking::TagTrackResult track = testing::trackRendered(scene, frame);
       ASSERT_TRUE(track.found) << track.status;
       const ibl::RgbPixelReader read = [&](int x, int y) {
         const std::uint8_t* p = frame.row(y) + 3 * x;
