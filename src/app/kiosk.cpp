@@ -930,14 +930,20 @@ class Kiosk {
   // its latency is paid once, and the bracket ends at the first frame whose
   // ball no longer clips (the rungs after it are dropped or not looked at).
   // Bracket frames are not shown: the last frame stays, with a status line.
+  // The rungs of a bracket: their EVs from the exposure they were planned
+  // from, and the exposures asked for.
+  struct ExposureLadder {
+    std::vector<double> ev;                            // in stops from the base
+    bool at_shortest = false;                          // its last rung is the sensor's shortest exposure
+    std::vector<FrameSource::ManualExposure> exposures;
+  };
   struct PendingBracket {
     ImageRGB8 reference;
     ibl::MirrorBallView view;
     ibl::ProbeOutline outline;
     FrameSource::ManualExposure base;  // the reference frame's exposure
     bool exposure_locked = false;      // ... and whether AE was locked for it
-    std::vector<double> ladder_ev;     // the rungs asked for, in stops from base
-    bool ladder_at_shortest = false;   // its last rung is the sensor's shortest exposure
+    ExposureLadder ladder;             // the rungs asked for, in stops from base
     int frames_waited = 0;             // since the request, or since the last frame kept
     std::vector<BracketCandidate> frames;
     std::uint64_t started_frame = 0;
@@ -975,26 +981,33 @@ class Kiosk {
   // sensor's shortest exposure (where the source knows it) replaced by that
   // one exposure, and that one left out when it is hardly shorter than the
   // rung before it.
-  void planLadder(PendingBracket& bracket, std::vector<FrameSource::ManualExposure>& exposures) const {
+  ExposureLadder planLadder(const FrameSource::ManualExposure& base) const {
     const LightsConfig& config = inputs_.settings.lights;
     const std::optional<double> shortest_us = source_->shortestExposureUs();
+    ExposureLadder ladder;
     for (double ev = -config.bracket_step_stops; ev >= -config.bracket_max_stops - 1e-9; ev -= config.bracket_step_stops) {
-      FrameSource::ManualExposure exposure = exposureAt(bracket.base, ev);
+      FrameSource::ManualExposure exposure = exposureAt(base, ev);
       if (shortest_us && exposure.exposure_us < *shortest_us) {
         exposure.exposure_us = *shortest_us;
-        const double shortest_ev = std::log2(exposure.exposure_us * exposure.analogue_gain /
-                                             (bracket.base.exposure_us * bracket.base.analogue_gain));
-        const double previous_ev = bracket.ladder_ev.empty() ? 0.0 : bracket.ladder_ev.back();
+        const double shortest_ev =
+            std::log2(exposure.exposure_us * exposure.analogue_gain / (base.exposure_us * base.analogue_gain));
+        const double previous_ev = ladder.ev.empty() ? 0.0 : ladder.ev.back();
         if (shortest_ev <= previous_ev - kBracketNewFrameStops) {
-          bracket.ladder_ev.push_back(shortest_ev);
-          exposures.push_back(exposure);
+          ladder.ev.push_back(shortest_ev);
+          ladder.exposures.push_back(exposure);
         }
-        bracket.ladder_at_shortest = true;
+        ladder.at_shortest = true;
         break;
       }
-      bracket.ladder_ev.push_back(ev);
-      exposures.push_back(exposure);
+      ladder.ev.push_back(ev);
+      ladder.exposures.push_back(exposure);
     }
+    return ladder;
+  }
+
+  // A frame's exposure as its metadata says (gain 1 where it does not say).
+  static FrameSource::ManualExposure exposureOf(const FrameBuffer& frame) {
+    return {frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0};
   }
 
   // A recalibration whose ball clips asks for its ladder a few frames
@@ -1005,8 +1018,7 @@ class Kiosk {
   // the normal exposure and the rungs follow the fit frame at once.
   struct EarlyLadder {
     FrameSource::ManualExposure base;
-    std::vector<double> ladder_ev;
-    bool ladder_at_shortest = false;
+    ExposureLadder ladder;
     std::uint64_t requested_frame = 0;
   };
   static constexpr int kBracketMaxLeadFrames = 6;
@@ -1026,12 +1038,10 @@ class Kiosk {
       return;
     const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
     if (ballPixelCodes(frameRgb(frame), *outline, merge).clipped == 0) return;
-    PendingBracket plan;
-    plan.base = {frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0};
-    std::vector<FrameSource::ManualExposure> exposures;
-    planLadder(plan, exposures);
-    if (exposures.empty() || !source_->setExposureLadder(exposures)) return;  // the fit will say why
-    early_ladder_ = EarlyLadder{plan.base, plan.ladder_ev, plan.ladder_at_shortest, frame_number};
+    EarlyLadder early{exposureOf(frame), {}, frame_number};
+    early.ladder = planLadder(early.base);
+    if (early.ladder.exposures.empty() || !source_->setExposureLadder(early.ladder.exposures)) return;  // the fit will say why
+    early_ladder_ = std::move(early);
     report_.count("bracket_early_ladders");
   }
 
@@ -1056,34 +1066,37 @@ class Kiosk {
       return false;
     }
     const ibl::HdrMergeSettings merge{inputs_.settings.maps.stages.camera_transfer};
-    PendingBracket bracket{frameRgb(frame), view, outline, {}, exposure_locked_, {}, false, 0, {},
-                           frame_number, monotonicNowS()};
+    PendingBracket bracket;
+    bracket.reference = frameRgb(frame);
+    bracket.view = view;
+    bracket.outline = outline;
+    bracket.exposure_locked = exposure_locked_;
+    bracket.started_frame = frame_number;
+    bracket.started_s = monotonicNowS();
     if (ballPixelCodes(bracket.reference, outline, merge).clipped == 0) {
       report_.count("brackets_not_needed");  // nothing clipped: the 8-bit map holds all the light
       return false;
     }
-    bracket.base = {frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0};
+    bracket.base = exposureOf(frame);
     if (early_ladder_) {
       // Asked for a few frames ago: its rungs are on their way. Their EVs
       // from this frame's exposure (the same, with AE locked).
       const double shift = std::log2(early_ladder_->base.exposure_us * early_ladder_->base.analogue_gain /
                                      (bracket.base.exposure_us * bracket.base.analogue_gain));
-      bracket.ladder_ev = early_ladder_->ladder_ev;
-      for (double& ev : bracket.ladder_ev) ev += shift;
-      bracket.ladder_at_shortest = early_ladder_->ladder_at_shortest;
+      bracket.ladder = early_ladder_->ladder;
+      for (double& ev : bracket.ladder.ev) ev += shift;
       bracket.lead_frames = static_cast<int>(frame_number - early_ladder_->requested_frame);
       early_ladder_.reset();
       report_.count("brackets_started");
       bracket_ = std::move(bracket);
       return true;
     }
-    std::vector<FrameSource::ManualExposure> exposures;
-    planLadder(bracket, exposures);
-    if (exposures.empty()) {
+    bracket.ladder = planLadder(bracket.base);
+    if (bracket.ladder.exposures.empty()) {
       report_.count("brackets_at_shortest_exposure");  // the frame was already as short as the sensor goes
       return false;
     }
-    if (!source_->setExposureLadder(exposures)) {
+    if (!source_->setExposureLadder(bracket.ladder.exposures)) {
       report_.count("brackets_unsupported");
       return false;
     }
@@ -1149,10 +1162,10 @@ class Kiosk {
       bracket.frames.push_back(std::move(candidate));
       bracket.frames_waited = 0;
       report_.count("bracket_frames");
-      const bool ladder_done = ev <= bracket.ladder_ev.back() + kBracketEvMatchStops;
+      const bool ladder_done = ev <= bracket.ladder.ev.back() + kBracketEvMatchStops;
       // The sensor's shortest exposure and the ball still clips: asking for
       // less would give the same again.
-      if (still_clips && ladder_done && bracket.ladder_at_shortest) report_.count("bracket_exposures_clamped");
+      if (still_clips && ladder_done && bracket.ladder.at_shortest) report_.count("bracket_exposures_clamped");
       done = !still_clips || ladder_done;
     } else if (!bracket.frames.empty()) {
       if (++bracket.frames_waited >= kBracketClampedAfterFrames) {
@@ -1162,7 +1175,7 @@ class Kiosk {
     } else if (++bracket.frames_waited > kBracketMaxWaitFrames) {
       report_.count("bracket_exposures_not_delivered");
       log_ << logPrefix(LogPriority::kWarning) << "probelight: frame " << frame_number << ": the camera did not deliver EV "
-           << std::fixed << std::setprecision(1) << bracket.ladder_ev.front() << " in " << kBracketMaxWaitFrames
+           << std::fixed << std::setprecision(1) << bracket.ladder.ev.front() << " in " << kBracketMaxWaitFrames
            << " frames; the bracket ends with no frame\n";
       done = true;
     }
@@ -1203,7 +1216,7 @@ class Kiosk {
                             {"frames", merged.frames},
                             {"still_clipped_sr", merged.still_clipped_sr},
                             {"camera_frames", frame_number - bracket.started_frame},
-                            {"ladder_ev", bracket.ladder_ev},
+                            {"ladder_ev", bracket.ladder.ev},
                             {"ladder_asked_frames_before_fit", bracket.lead_frames},
                             {"exposure_latency_frames", bracket.latency_frames},
                             // From the fit frame to the merged map: the camera's frames plus the merge.

@@ -156,6 +156,10 @@ TEST(AppSettings, MapUpdateFieldsAreRangeChecked) {
   expectRejected("map_updates:\n  max_age_frames: 0\n", "map_updates.max_age_frames");
   expectRejected("map_updates:\n  max_center_shift_px: -1\n", "map_updates.max_center_shift_px");
   expectRejected("map_updates:\n  change_treshold_code: 3\n", "change_treshold_code");
+  // The keys the bracket and the post brought.
+  expectRejected("sim:\n  camera_buffers: 1\n", "sim.camera_buffers");
+  expectRejected("sim:\n  min_exposure_reported: maybe\n", "sim.min_exposure_reported");
+  expectRejected("lights:\n  post_reference: 2\n", "lights.post_reference");
 }
 
 }  // namespace
