@@ -43,10 +43,10 @@
 #include "ibl/light_dome.hpp"
 #include "ibl/spherical_blur.hpp"
 #include "ibl/surface_shading.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
-#include "pipeline/ground_shadow.hpp"
-#include "pipeline/object_compositor.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
+#include "passes/ground_shadow.hpp"
+#include "passes/object_compositor.hpp"
 #include "sim/occluder.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
@@ -362,10 +362,10 @@ const ibl::CubeMapRGB& cpuReflection(int face_size, int iterations) {
 
 // Camera frames as textures, one per frame, for one capability set.
 struct FrameTextures {
-  std::vector<std::unique_ptr<pipeline::CameraFrameTexture>> textures;
+  std::vector<std::unique_ptr<passes::CameraFrameTexture>> textures;
   bool init(const gles::Capabilities& capabilities, std::string& error) {
     for (const Frame& frame : setup().frames) {
-      auto texture = std::make_unique<pipeline::CameraFrameTexture>();
+      auto texture = std::make_unique<passes::CameraFrameTexture>();
       if (!texture->init(capabilities, error) || !texture->upload(frame.rgb, error)) return false;
       textures.push_back(std::move(texture));
     }
@@ -379,8 +379,8 @@ void probeToCube(benchmark::State& state, bool eight_bit, int face_size, int ite
   const gles::Capabilities& capabilities = eight_bit ? s.capabilities_8bit : s.capabilities_full;
   std::string error;
   FrameTextures frames;
-  pipeline::EnvironmentMaps maps;
-  pipeline::EnvironmentMapSettings settings;
+  passes::EnvironmentMaps maps;
+  passes::EnvironmentMapSettings settings;
   settings.reflection_face_size = face_size;
   settings.normal_iterations = iterations;
   if (!frames.init(capabilities, error) || !maps.init(capabilities, settings, error)) {
@@ -441,7 +441,7 @@ void probeToCube(benchmark::State& state, bool eight_bit, int face_size, int ite
 //    projection, GPU evaluation): the two diffuse methods side by side.
 
 // One diffuse update by the chosen method.
-bool updateDiffuseMap(pipeline::EnvironmentMaps& maps, bool sh9, std::string& error) {
+bool updateDiffuseMap(passes::EnvironmentMaps& maps, bool sh9, std::string& error) {
   if (!sh9) return maps.updateDiffuse(error);
   std::vector<float> validity;
   const std::optional<ibl::CubeMapRGB> reflection = maps.readReflection(error, &validity);
@@ -454,8 +454,8 @@ void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int hal
   const gles::Capabilities& capabilities = eight_bit ? s.capabilities_8bit : s.capabilities_full;
   std::string error;
   FrameTextures frames;
-  pipeline::EnvironmentMaps maps;
-  pipeline::EnvironmentMapSettings settings;  // reflection 64, 4 iterations
+  passes::EnvironmentMaps maps;
+  passes::EnvironmentMapSettings settings;  // reflection 64, 4 iterations
   settings.intermediate_face_size = face_size;
   settings.diffuse_face_size = face_size;
   settings.blur_half_taps = half_taps;
@@ -530,13 +530,13 @@ void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int hal
 
 struct ShadowRig {
   FrameTextures frames;
-  pipeline::EnvironmentMaps maps;
+  passes::EnvironmentMaps maps;
   std::optional<ibl::CubeMapRGB> reflection;
   std::vector<float> validity;
   bool init(std::string& error) {
     Setup& s = setup();
     if (!frames.init(s.capabilities_full, error) ||
-        !maps.init(s.capabilities_full, pipeline::EnvironmentMapSettings{}, error) ||
+        !maps.init(s.capabilities_full, passes::EnvironmentMapSettings{}, error) ||
         !maps.updateReflection(*frames.textures[0], s.frames[0].view, s.scene.rig.probe_reflectance, error))
       return false;
     reflection = maps.readReflection(error, &validity);
@@ -572,7 +572,7 @@ void shadows(benchmark::State& state, ibl::DomePlacement placement, int count) {
   if (!requireGl(state)) return;
   Setup& s = setup();
   ShadowRig rig;
-  pipeline::GroundShadow shadow;
+  passes::GroundShadow shadow;
   std::string error;
   if (!rig.init(error) || !shadow.init(s.capabilities_full, {}, error)) {
     state.SkipWithError(error.c_str());
@@ -639,7 +639,7 @@ void shadowComposite(benchmark::State& state) {
   if (!requireGl(state)) return;
   Setup& s = setup();
   ShadowRig rig;
-  pipeline::GroundShadow shadow;
+  passes::GroundShadow shadow;
   gles::RenderTarget target;
   std::string error;
   if (!rig.init(error) || !shadow.init(s.capabilities_full, {}, error) ||
@@ -663,14 +663,14 @@ void shadowComposite(benchmark::State& state) {
 
 struct RenderRig {
   FrameTextures frames;
-  pipeline::EnvironmentMaps maps;
-  pipeline::ObjectCompositor compositor;
+  passes::EnvironmentMaps maps;
+  passes::ObjectCompositor compositor;
   gles::RenderTarget target;
   bool init(std::string& error) {
     Setup& s = setup();
     return frames.init(s.capabilities_full, error) &&
-           maps.init(s.capabilities_full, pipeline::EnvironmentMapSettings{}, error) &&
-           compositor.init(s.capabilities_full, pipeline::ObjectCompositorSettings{}, maps.storage(), error) &&
+           maps.init(s.capabilities_full, passes::EnvironmentMapSettings{}, error) &&
+           compositor.init(s.capabilities_full, passes::ObjectCompositorSettings{}, maps.storage(), error) &&
            target.init(s.scene.camera.width_px, s.scene.camera.height_px, error) &&
            maps.updateReflection(*frames.textures[0], s.frames[0].view, s.scene.rig.probe_reflectance, error) &&
            maps.updateDiffuse(error);
@@ -730,7 +730,7 @@ void presentReadback(benchmark::State& state) {
 void uploadFrame(benchmark::State& state) {
   if (!requireGl(state)) return;
   Setup& s = setup();
-  pipeline::CameraFrameTexture texture;
+  passes::CameraFrameTexture texture;
   std::string error;
   if (!texture.init(s.capabilities_full, error) || !texture.upload(s.frames[0].rgb, error)) {
     state.SkipWithError(error.c_str());
@@ -757,7 +757,7 @@ void uploadI420Frame(benchmark::State& state) {
     const ImageRGB8& rgb = s.frames[i].rgb;
     encodeSimFrame(rgb, PixelLayout::kI420, frames[i]);
   }
-  pipeline::CameraFrameTexture texture;
+  passes::CameraFrameTexture texture;
   std::string error;
   if (!texture.init(s.capabilities_full, error) || !texture.upload(frames[0], error)) {
     state.SkipWithError(error.c_str());

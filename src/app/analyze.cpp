@@ -19,10 +19,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "app/app_settings.hpp"
-#include "app/bracket_merge.hpp"
-#include "app/log_priority.hpp"
-#include "app/post_report.hpp"
-#include "app/stage_settings.hpp"
+#include "stages/bracket_merge.hpp"
+#include "core/log_priority.hpp"
+#include "stages/post_report.hpp"
+#include "stages/stage_settings.hpp"
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
 #include "config/rig_file.hpp"
@@ -41,10 +41,10 @@
 #include "ibl/probe_outline.hpp"
 #include "ibl/post_reference.hpp"
 #include "ibl/white_reference.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
-#include "pipeline/ground_shadow.hpp"
-#include "pipeline/object_compositor.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
+#include "passes/ground_shadow.hpp"
+#include "passes/object_compositor.hpp"
 #include "tracking/probe_edge_fit.hpp"
 #include "tracking/tag_tracker.hpp"
 
@@ -352,8 +352,8 @@ class Analyzer {
     gles::Capabilities capabilities = gles::probeCapabilities();
     if (settings_.maps.force_8bit) capabilities = capabilities.withoutExtensions();
     result_.json["gl"] = capabilities.summary();
-    frame_texture_ = std::make_unique<pipeline::CameraFrameTexture>();
-    maps_ = std::make_unique<pipeline::EnvironmentMaps>();
+    frame_texture_ = std::make_unique<passes::CameraFrameTexture>();
+    maps_ = std::make_unique<passes::EnvironmentMaps>();
     if (!frame_texture_->init(capabilities, error) ||
         !maps_->init(capabilities, environmentMapSettings(settings_), error)) {
       result_.fail(1, "GPU set-up failed: " + error);
@@ -605,13 +605,13 @@ class Analyzer {
       caster.radius_m = render_->radius_m;
     }
     const std::vector<ibl::ShadowLight> lights = ibl::groundShadowLights(dome_);
-    pipeline::GroundShadow shadow;
-    pipeline::ObjectCompositor compositor;
+    passes::GroundShadow shadow;
+    passes::ObjectCompositor compositor;
     gles::RenderTarget target;
     const auto start = Clock::now();
     if (!shadow.init(capabilities, groundShadowSettings(settings_), error) ||
         (settings_.lights.shadows && !shadow.update(lights, caster, error)) ||
-        !compositor.init(capabilities, pipeline::ObjectCompositorSettings{}, maps_->storage(), error) ||
+        !compositor.init(capabilities, passes::ObjectCompositorSettings{}, maps_->storage(), error) ||
         !target.init(camera_.width_px, camera_.height_px, error)) {
       result_.fail(1, "GPU: " + error);
       return;
@@ -632,7 +632,7 @@ class Analyzer {
       drawn = compositor.drawSphereObject(camera_, track_.pose, caster.boundingCentre(), caster.radius_m, lambertian,
                                           lighting, *maps_, error);
     else if (drawn)
-      drawn = compositor.drawMeshObject(camera_, track_.pose, pipeline::boxMesh(caster), lambertian, lighting,
+      drawn = compositor.drawMeshObject(camera_, track_.pose, passes::boxMesh(caster), lambertian, lighting,
                                         *maps_, error);
     ImageRGB8 composite;
     if (!drawn || !target.readRGB(composite, error)) {
@@ -798,8 +798,8 @@ class Analyzer {
   bool probe_usable_ = false;
   // The context first, so that it outlives the GL objects declared after it.
   std::unique_ptr<gles::EglContext> context_;
-  std::unique_ptr<pipeline::CameraFrameTexture> frame_texture_;
-  std::unique_ptr<pipeline::EnvironmentMaps> maps_;
+  std::unique_ptr<passes::CameraFrameTexture> frame_texture_;
+  std::unique_ptr<passes::EnvironmentMaps> maps_;
   std::optional<ibl::CubeMapRGB> reflection_;
   std::optional<ibl::CubeMapRGB> hdr_reflection_;  // from --bracket, or the 8-bit map corrected by the white border
   std::vector<ibl::ClippedLight> clipped_lights_;

@@ -12,7 +12,7 @@ AppSettings loadAppSettings(const std::string& path) {
   ConfigReader file(path);
 
   ConfigReader maps = file.section("environment_maps");
-  pipeline::EnvironmentMapSettings& stages = settings.maps.stages;
+  passes::EnvironmentMapSettings& stages = settings.maps.stages;
   stages.reflection_face_size = maps.readInt("face_size", stages.reflection_face_size, Range::closed(8, 1024));
   if ((stages.reflection_face_size & (stages.reflection_face_size - 1)) != 0)
     maps.fail("face_size", std::to_string(stages.reflection_face_size) + " is not a power of two");

@@ -6,95 +6,12 @@
 
 #include <glm/glm.hpp>
 
-#include "app/lighting_state_machine.hpp"
-#include "app/map_update_policy.hpp"
 #include "display/kms_display.hpp"
-#include "ibl/light_dome.hpp"
 #include "input/gpio_button.hpp"
 #include "input/status_led.hpp"
-#include "pipeline/environment_maps.hpp"
-#include "tracking/pose_smoother.hpp"
+#include "stages/pipeline_settings.hpp"
 
 namespace probelight {
-
-enum class DiffuseMethod {
-  kCosinePasses,  // two separable cosine passes on the GPU (ibl::irradianceOverPiByCosinePasses)
-  kSH9,           // Ramamoorthi & Hanrahan's 9 coefficients, projected on the CPU
-};
-
-struct EnvironmentMapConfig {
-  // Sizes, taps and iterations, with the pipeline's own defaults.
-  pipeline::EnvironmentMapSettings stages;
-  DiffuseMethod diffuse_method = DiffuseMethod::kCosinePasses;
-  bool force_8bit = false;  // ignore float render-target extensions (tests the GLES2 fallback)
-};
-
-struct TrackingConfig {
-  double quad_decimate = 2.0;
-  int threads = 2;
-  double quad_sigma = 0.0;
-  bool refine_edges = true;
-  bool refine_corners = true;  // full-resolution linear-light edge fit (tracking/corner_refiner.hpp)
-  bool track_in_window = true;     // search a window around the predicted tag (tracking/tag_detector.hpp)
-  int full_frame_every_frames = 30;
-  tracking::PoseSmoothingSettings smoothing;  // tracking/pose_smoother.hpp
-};
-
-// Refining the rig's ball position and radius from the image, over frames
-// (tracking/probe_edge_fit.hpp). Off by default: a fit is good to a few
-// tenths of a pixel per view, so it helps a rig measured millimetres wrong and
-// costs a correct one a little.
-struct ProbeRefinementConfig {
-  bool enabled = false;
-  double weight = 0.1;  // each frame's fit moves the correction this far toward it (30 frames: 96% of the way)
-};
-
-// The dome of shadow-casting lights (ibl/light_dome.hpp) and the ground
-// shadow (pipeline/ground_shadow.hpp).
-struct LightsConfig {
-  ibl::LightDomeSettings dome;  // count 8, clustered placement
-  double fade_s = 0.5;          // new lights move and fade in over this long
-  bool shadows = true;
-  int shadow_map_size_px = 256;
-  int ground_texture_size_px = 256;
-  double max_shadow_reach_m = 0.5;  // from the object, for lights near the horizon
-  // Refit the lights when the ground's irradiance in the diffuse map moves by
-  // more than refit_change_fraction since the last fit (a lamp switched on).
-  // 10%: the map of a still scene moves by well under 1% from noise (the
-  // update policy's blend halves it again), and a light that changes the
-  // ground's light by less makes shadows that differ by less than that.
-  bool refit_when_light_changes = false;
-  double refit_change_fraction = 0.1;
-  // At each fit, the tag's white border (rig.yaml tag_white_albedo) gives
-  // the ball's clipped highlights the light they hide
-  // (ibl/white_reference.hpp): the dome is fitted from the corrected map and
-  // the object shaded with the clipped lights until the next fit.
-  bool white_reference = true;
-  // ... and the ball's post, where rig.yaml describes one (post_radius,
-  // post_albedo), divides that light between the clipped regions by its
-  // readings at the normals it turns to the camera (ibl/post_reference.hpp).
-  bool post_reference = true;
-  // At each fit whose frame shows the ball clipped, `run` takes shorter
-  // exposures, bracket_step_stops apart, while the ball still clips, down
-  // to bracket_max_stops under the frame's (0: no bracket), and fits the
-  // lights from them merged (the white border is then not needed). 3 stops
-  // keep two frames' well-exposed ranges overlapping (8-bit sRGB codes
-  // 6..250 span about 11 stops); 12 stops reach a sun from a sky.
-  double bracket_step_stops = 3.0;
-  double bracket_max_stops = 12.0;
-};
-
-struct ObjectConfig {
-  double radius_m = 0.035;             // a sphere resting on the ground
-  glm::dvec2 position_w{0.0, 0.0};     // where it rests, in W (metres)
-  glm::dvec3 albedo{0.8, 0.8, 0.8};
-  double k_specular = 0.25;
-  double shininess = 48.0;
-  double k_reflect = 0.08;
-  // 1: the reflection term is a mirror; 0: it reads the diffuse map; between,
-  // it blends the glossy levels (src/ibl/surface_shading.hpp).
-  double glossiness = 1.0;
-};
 
 struct SimConfig {
   std::string env = "studio";
@@ -135,46 +52,17 @@ struct ButtonConfig {
   StatusLedSettings led;    // on the button's chip; line -1: none
 };
 
-// The board's camera (--source libcamera); its size is camera.yaml's.
-struct CameraConfig {
-  std::string id;  // libcamera's camera id; empty: the first camera
-  std::string pixel_format = "yuv420";  // or "nv12"
-  // Freeze auto exposure and white balance while the lights are fitted, so
-  // that every frame of a recalibration sees the ball alike. Not during the
-  // first `exposure_settle_frames` after the camera starts (AE is still
-  // converging: locking then would keep a wrong exposure).
-  bool lock_exposure = true;
-  int exposure_settle_frames = 30;
-  // A camera that disappears is re-opened after 0.5 s, then after twice as
-  // long each time it fails, up to this.
-  double reconnect_max_interval_s = 30.0;
-};
-
 // The board's screen (--display kms).
 struct DisplayConfig {
   KmsDisplaySettings kms;
 };
 
-// Where the kiosk keeps what must survive a restart (app/state_store.hpp).
-struct StateConfig {
-  std::string dir;  // empty: nothing is kept (the desktop default; the board uses /var/lib/probelight)
-};
-
-struct AppSettings {
-  EnvironmentMapConfig maps;
-  TrackingConfig tracking;
-  ObjectConfig object;
-  RecalibrationPolicy recalibration;
-  MapUpdateSettings map_updates;  // when the maps are rebuilt (map_update_policy.hpp)
-  ProbeRefinementConfig probe_refinement;
-  LightsConfig lights;
+// The stages' sections (stages/pipeline_settings.hpp), and the kiosk's own.
+struct AppSettings : PipelineSettings {
   ButtonConfig button;
-  StateConfig state;
   DisplayConfig display;
-  CameraConfig camera;
   SimConfig sim;
   int save_every = 1;     // write every K-th composited frame; 0 = none
-  bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)
 };
 
 // Reads probelight.yaml. Throws config::ConfigError (one line, file + field).

@@ -17,18 +17,18 @@
 #include <opencv2/imgproc.hpp>
 
 #include "app/app_settings.hpp"
-#include "app/bracket_merge.hpp"
-#include "app/light_transition.hpp"
-#include "app/lighting_state_machine.hpp"
-#include "app/log_priority.hpp"
-#include "app/post_report.hpp"
-#include "app/map_update_policy.hpp"
-#include "app/run_report.hpp"
+#include "stages/bracket_merge.hpp"
+#include "stages/light_transition.hpp"
+#include "stages/lighting_state_machine.hpp"
+#include "core/log_priority.hpp"
+#include "stages/post_report.hpp"
+#include "stages/map_update_policy.hpp"
+#include "stages/run_report.hpp"
 #include "app/reconnect_backoff.hpp"
 #include "app/service_notify.hpp"
 #include "app/shutdown_request.hpp"
-#include "app/stage_settings.hpp"
-#include "app/state_store.hpp"
+#include "stages/stage_settings.hpp"
+#include "stages/state_store.hpp"
 #include "capture/image_frame_source.hpp"
 #include "capture/libcamera_source.hpp"
 #include "capture/sim_frame_source.hpp"
@@ -46,10 +46,10 @@
 #include "ibl/white_reference.hpp"
 #include "input/button_source.hpp"
 #include "input/status_led.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
-#include "pipeline/ground_shadow.hpp"
-#include "pipeline/object_compositor.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
+#include "passes/ground_shadow.hpp"
+#include "passes/object_compositor.hpp"
 #include "sim/world.hpp"
 #include "tracking/pose_smoother.hpp"
 #include "tracking/probe_edge_fit.hpp"
@@ -165,7 +165,7 @@ void measureAgainstTruth(const FrameTruth& truth, const tracking::TagTrackResult
 // `view`: the one the maps were made from. Returns the mean relative error of
 // the diffuse map against the 8-bit-visible irradiance (NaN when not read).
 double measureMapsAgainstTruth(const sim::World& world, std::uint64_t frame_index, const ibl::MirrorBallView& view,
-                               const pipeline::EnvironmentMaps& maps, RunReport& report) {
+                               const passes::EnvironmentMaps& maps, RunReport& report) {
   // Reflection map, over the directions the ball shows well: within 100
   // degrees of the direction back toward the camera (beyond that the view is
   // squeezed into the rim, and behind it is the blind spot). Only the sky
@@ -362,7 +362,7 @@ class Kiosk {
 
     if (!frame_texture_.init(capabilities_, error) ||
         !maps_.init(capabilities_, environmentMapSettings(settings), error) ||
-        !compositor_.init(capabilities_, pipeline::ObjectCompositorSettings{}, maps_.storage(), error) ||
+        !compositor_.init(capabilities_, passes::ObjectCompositorSettings{}, maps_.storage(), error) ||
         (settings.lights.shadows && !ground_shadow_.init(capabilities_, groundShadowSettings(settings), error)))
       return fail(1, "GPU set-up failed: " + error);
     light_transition_ = LightTransition(settings.lights.fade_s);
@@ -1504,7 +1504,7 @@ class Kiosk {
   }
 
   nlohmann::json cameraJson() const {
-    nlohmann::json out = {{"frame_upload", pipeline::toString(frame_texture_.lastPath())},
+    nlohmann::json out = {{"frame_upload", passes::toString(frame_texture_.lastPath())},
                            {"losses", report_.counter("camera_losses")},
                            {"reconnects", report_.counter("camera_reconnects")},
                            {"reconnect_failures", report_.counter("camera_reconnect_failures")},
@@ -1552,13 +1552,13 @@ class Kiosk {
   std::unique_ptr<FrameSource> source_;
   std::unique_ptr<Display> display_;  // owns the GL context: declared before the GL objects below
   gles::Capabilities capabilities_;
-  pipeline::CameraFrameTexture frame_texture_;
-  pipeline::EnvironmentMaps maps_;
-  pipeline::ObjectCompositor compositor_;
+  passes::CameraFrameTexture frame_texture_;
+  passes::EnvironmentMaps maps_;
+  passes::ObjectCompositor compositor_;
   std::unique_ptr<tracking::TagTracker> tracker_;
   std::unique_ptr<tracking::TagTracker> bracket_tracker_;  // follows the tag through each bracket's frames
   std::unique_ptr<tracking::PoseSmoother> smoother_;
-  pipeline::GroundShadow ground_shadow_;
+  passes::GroundShadow ground_shadow_;
   LightTransition light_transition_;
   double frame_time_s_ = 0.0;  // of the frame being processed, from its timestamp
   glm::dvec3 lights_fitted_e_up_{0.0};  // the ground's irradiance when the lights were last fitted

@@ -10,7 +10,7 @@
 #include "app/calibrate_camera.hpp"
 #include "app/command_line.hpp"
 #include "app/kiosk.hpp"
-#include "app/log_priority.hpp"
+#include "core/log_priority.hpp"
 
 int main(int argc, char** argv) {
   using namespace probelight;

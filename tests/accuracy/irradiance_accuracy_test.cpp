@@ -23,8 +23,8 @@
 #include "accuracy_test_support.hpp"
 #include "ibl/probe_outline.hpp"
 #include "ibl/spherical_harmonics.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
 #include "sim/camera_path.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
@@ -80,7 +80,7 @@ TEST_F(IrradianceAccuracy, FourteenNormalsAcrossWorldsViewsAndFaceSizes) {
                             {"far 0.8 m", 0.8, 30.0, -70.0, {0, 0, 0}},
                             {"ball off-centre", 0.55, 38.0, -110.0, {-0.09, 0.05, 0}}};
   const int face_sizes[] = {16, 32, 64, 128};
-  const int default_face_size = pipeline::EnvironmentMapSettings{}.reflection_face_size;
+  const int default_face_size = passes::EnvironmentMapSettings{}.reflection_face_size;
   const gles::Capabilities capabilities = gles::probeCapabilities();
 
   std::map<int, Accumulated> cosine_by_face, sh9_by_face;
@@ -112,13 +112,13 @@ TEST_F(IrradianceAccuracy, FourteenNormalsAcrossWorldsViewsAndFaceSizes) {
       const ibl::MirrorBallView ball{scene.camera, track.pose, scene.rig.probe_center_w, scene.rig.probe_radius_m};
 
       std::string error;
-      pipeline::CameraFrameTexture texture;
+      passes::CameraFrameTexture texture;
       ASSERT_TRUE(texture.init(capabilities, error) && texture.upload(frame, error)) << error;
       for (int face_size : face_sizes) {
-        pipeline::EnvironmentMapSettings settings;
+        passes::EnvironmentMapSettings settings;
         settings.reflection_face_size = face_size;
         settings.glossy_levels = 0;  // only the diffuse map is measured here
-        pipeline::EnvironmentMaps maps;
+        passes::EnvironmentMaps maps;
         ASSERT_TRUE(maps.init(capabilities, settings, error)) << error;
         ASSERT_TRUE(maps.updateReflection(texture, ball, scene.rig.probe_reflectance, error)) << error;
         ASSERT_TRUE(maps.updateDiffuse(error)) << error;

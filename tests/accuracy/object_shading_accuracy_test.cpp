@@ -20,16 +20,16 @@
 #include <opencv2/imgproc.hpp>
 
 #include "accuracy_test_support.hpp"
-#include "app/bracket_merge.hpp"
+#include "stages/bracket_merge.hpp"
 #include "core/apriltag_families.hpp"
 #include "gles/capabilities.hpp"
 #include "gles/render_target.hpp"
 #include "ibl/color_transfer.hpp"
 #include "ibl/post_reference.hpp"
 #include "ibl/white_reference.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
-#include "pipeline/object_compositor.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
+#include "passes/object_compositor.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
 #include "tracking/tag_tracker.hpp"
@@ -87,10 +87,10 @@ TEST_F(ObjectShadingAccuracy, DiffuseSphereAgainstTheSimulatorsHdrLitSphere) {
 
     // The kiosk's stages: 8-bit maps from the frame.
     std::string error;
-    pipeline::CameraFrameTexture texture;
+    passes::CameraFrameTexture texture;
     ASSERT_TRUE(texture.init(capabilities, error) && texture.upload(frame, error)) << error;
-    pipeline::EnvironmentMaps maps;
-    pipeline::EnvironmentMapSettings map_settings;
+    passes::EnvironmentMaps maps;
+    passes::EnvironmentMapSettings map_settings;
     map_settings.glossy_levels = 0;
     ASSERT_TRUE(maps.init(capabilities, map_settings, error)) << error;
     ASSERT_TRUE(maps.updateReflection(texture, ball, scene.rig.probe_reflectance, error)) << error;
@@ -147,9 +147,9 @@ TEST_F(ObjectShadingAccuracy, DiffuseSphereAgainstTheSimulatorsHdrLitSphere) {
 
     // Draw the sphere three ways over a black frame, and once in flat white
     // for its coverage.
-    pipeline::ObjectCompositor compositor;
+    passes::ObjectCompositor compositor;
     gles::RenderTarget target;
-    pipeline::CameraFrameTexture black_texture;
+    passes::CameraFrameTexture black_texture;
     ImageRGB8 black;
     black.resize(frame.width, frame.height);
     ASSERT_TRUE(compositor.init(capabilities, {}, maps.storage(), error) &&

@@ -22,12 +22,12 @@
 #include "gles/capabilities.hpp"
 #include "gles/egl_context.hpp"
 #include "accuracy_test_support.hpp"
-#include "app/bracket_merge.hpp"
+#include "stages/bracket_merge.hpp"
 #include "ibl/ground_shadow.hpp"
 #include "ibl/light_dome.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
-#include "pipeline/ground_shadow.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
+#include "passes/ground_shadow.hpp"
 #include "sim/camera_path.hpp"
 #include "sim/occluder.hpp"
 #include "sim/scene_config.hpp"
@@ -66,7 +66,7 @@ std::vector<Object> objects() {
 
 // The fraction the GPU stage gives at ground point p: bilinear in its texture,
 // 1 outside the square it covers (no shadow reaches there).
-double gpuFractionAt(const pipeline::GroundShadow& shadow, const std::vector<glm::vec3>& fraction, const glm::dvec2& p) {
+double gpuFractionAt(const passes::GroundShadow& shadow, const std::vector<glm::vec3>& fraction, const glm::dvec2& p) {
   const ibl::GroundRegion& region = shadow.region();
   const int n = shadow.groundTextureSizePx();
   const glm::dvec2 uv = (p - region.centre_w) / (2.0 * region.half_size_m) + 0.5;
@@ -134,11 +134,11 @@ TEST_F(ShadowAccuracy, GroundAttenuationAgainstTheTruthAndTheDominantLightAgains
     const tracking::TagTrackResult track = tracker.track(luma.data(), frame.width, frame.height, frame.width);
     ASSERT_TRUE(track.found) << track.status;
     std::string error;
-    pipeline::CameraFrameTexture texture;
+    passes::CameraFrameTexture texture;
     ASSERT_TRUE(texture.init(capabilities, error) && texture.upload(frame, error)) << error;
-    pipeline::EnvironmentMapSettings map_settings;
+    passes::EnvironmentMapSettings map_settings;
     map_settings.glossy_levels = 0;
-    pipeline::EnvironmentMaps maps;
+    passes::EnvironmentMaps maps;
     ASSERT_TRUE(maps.init(capabilities, map_settings, error)) << error;
     const ibl::MirrorBallView ball{scene.camera, track.pose, scene.rig.probe_center_w, scene.rig.probe_radius_m};
     ASSERT_TRUE(maps.updateReflection(texture, ball, scene.rig.probe_reflectance, error)) << error;
@@ -146,7 +146,7 @@ TEST_F(ShadowAccuracy, GroundAttenuationAgainstTheTruthAndTheDominantLightAgains
     const std::optional<ibl::CubeMapRGB> reflection = maps.readReflection(error, &validity);
     ASSERT_TRUE(reflection) << error;
 
-    pipeline::GroundShadow shadow;
+    passes::GroundShadow shadow;
     ASSERT_TRUE(shadow.init(capabilities, {}, error)) << error;
     for (const ibl::DomePlacement placement : placements) {
       ibl::LightDomeSettings dome_settings;
@@ -246,11 +246,11 @@ TEST_F(ShadowAccuracy, WithABracketTheShadowMatchesTheHdrTruth) {
     const ibl::ProbeOutline outline = ibl::computeProbeOutline(ball);
 
     std::string error;
-    pipeline::CameraFrameTexture texture;
+    passes::CameraFrameTexture texture;
     ASSERT_TRUE(texture.init(capabilities, error) && texture.upload(frame, error)) << error;
-    pipeline::EnvironmentMapSettings map_settings;
+    passes::EnvironmentMapSettings map_settings;
     map_settings.glossy_levels = 0;
-    pipeline::EnvironmentMaps maps;
+    passes::EnvironmentMaps maps;
     ASSERT_TRUE(maps.init(capabilities, map_settings, error)) << error;
     ASSERT_TRUE(maps.updateReflection(texture, ball, scene.rig.probe_reflectance, error)) << error;
     std::vector<float> validity;
@@ -274,7 +274,7 @@ TEST_F(ShadowAccuracy, WithABracketTheShadowMatchesTheHdrTruth) {
     const BracketMergeResult merged = mergeBracketProbe(frame, std::move(candidates), setup, nullptr);
     ASSERT_TRUE(merged.hdr_cube) << merged.status << " " << merged.frames.dump();
 
-    pipeline::GroundShadow shadow;
+    passes::GroundShadow shadow;
     ASSERT_TRUE(shadow.init(capabilities, {}, error)) << error;
     const std::vector<ibl::DomeLight> dome_hdr = ibl::fitLightDome(*merged.hdr_cube, &validity, {});
     const std::vector<ibl::DomeLight> dome_ldr = ibl::fitLightDome(*reflection, &validity, {});

@@ -24,7 +24,7 @@
 
 #include "binary_test_support.hpp"
 #include "config/camera_file.hpp"
-#include "app/state_store.hpp"
+#include "stages/state_store.hpp"
 #include "config/rig_file.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/scene_geometry.hpp"

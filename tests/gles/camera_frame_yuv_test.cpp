@@ -16,7 +16,7 @@
 #include "capture/frame_source.hpp"
 #include "core/ycbcr.hpp"
 #include "gles_test_support.hpp"
-#include "pipeline/camera_frame_texture.hpp"
+#include "passes/camera_frame_texture.hpp"
 #include "capture/sim_frame_source.hpp"
 
 namespace probelight {
@@ -94,7 +94,7 @@ constexpr int kRoundingTolerance = 2;
 
 TEST_F(GpuTest, I420AndNv12PlanesConvertToTheRgbTheyCameFrom) {
   const ImageRGB8 image = flatPatchImage(640, 480, 8, 7);
-  pipeline::CameraFrameTexture texture;
+  passes::CameraFrameTexture texture;
   std::string error;
   ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
   // One texture object through both layouts (and back): the chroma plane's
@@ -102,7 +102,7 @@ TEST_F(GpuTest, I420AndNv12PlanesConvertToTheRgbTheyCameFrom) {
   for (const PixelLayout layout : {PixelLayout::kI420, PixelLayout::kNv12, PixelLayout::kI420}) {
     SCOPED_TRACE(layout == PixelLayout::kNv12 ? "NV12" : "I420");
     ASSERT_TRUE(texture.upload(yuvFrame(image, layout), error)) << error;
-    EXPECT_EQ(texture.lastPath(), pipeline::FrameUploadPath::kYuvUpload);
+    EXPECT_EQ(texture.lastPath(), passes::FrameUploadPath::kYuvUpload);
     EXPECT_LE(maxDifferenceInsidePatches(readTexture(texture.texture(), 640, 480), image, 8), kRoundingTolerance);
   }
 }
@@ -137,7 +137,7 @@ TEST_F(GpuTest, YuvConversionHoldsOnThePlain8BitPathForOddSizesAndPaddedRows) {
       SCOPED_TRACE(plain ? "extensions masked" : "all extensions");
       const gles::Capabilities caps =
           plain ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
-      pipeline::CameraFrameTexture texture;
+      passes::CameraFrameTexture texture;
       ASSERT_TRUE(texture.init(caps, error)) << error;
       ASSERT_TRUE(texture.upload(tight, error)) << error;
       const ImageRGB8 from_tight = readTexture(texture.texture(), 101, 37);
@@ -190,7 +190,7 @@ TEST_F(GpuTest, ExternalImagesAreCopiedIntoTheFrameTextureUnchanged) {
   // Pretend dmabuf import exists, so that the external program is built.
   gles::Capabilities with_import = caps;
   with_import.egl_dmabuf_import = true;
-  pipeline::CameraFrameTexture texture;
+  passes::CameraFrameTexture texture;
   std::string error;
   ASSERT_TRUE(texture.init(with_import, error)) << error;
   ASSERT_TRUE(texture.dmabufImportAvailable()) << texture.dmabufImportProblem();
@@ -220,7 +220,7 @@ TEST_F(GpuTest, ExternalImagesAreCopiedIntoTheFrameTextureUnchanged) {
 }
 
 TEST_F(GpuTest, BrokenI420FramesAreRefusedWithAReason) {
-  pipeline::CameraFrameTexture texture;
+  passes::CameraFrameTexture texture;
   std::string error;
   ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
   FrameBuffer frame = yuvFrame(flatPatchImage(64, 48, 2, 1));

@@ -42,7 +42,7 @@
 
 #include "gles_test_support.hpp"
 #include "ibl/spherical_blur.hpp"
-#include "pipeline/environment_maps.hpp"
+#include "passes/environment_maps.hpp"
 
 namespace probelight::test {
 
@@ -55,8 +55,8 @@ struct CosineReference {
 
 // Rounding of a stored linear value: RGBA8 by `levels` 8-bit levels of the
 // sRGB code at `scale`; half floats 2^-11 relative.
-inline double storageRoundingBound(pipeline::CubeStorage storage, double value, double scale, double levels) {
-  if (storage == pipeline::CubeStorage::kLinearHalfFloat) return std::abs(value) * std::ldexp(1.0, -11);
+inline double storageRoundingBound(passes::CubeStorage storage, double value, double scale, double levels) {
+  if (storage == passes::CubeStorage::kLinearHalfFloat) return std::abs(value) * std::ldexp(1.0, -11);
   const double encoded = ibl::linearToSrgb(std::max(0.0, value) / scale);
   return scale * srgbDecodeSlope(std::min(1.0, encoded + levels / 255.0)) * levels / 255.0;
 }
@@ -125,11 +125,11 @@ inline double prefilterWeightDelta(int input_face_size, int factor) {
 // back, i.e. exactly what the GPU holds). `scale`: the reflection map's
 // linear_scale. `unit_roundoff`: the fragment shader's.
 inline CosineReference cosineIrradianceReference(const ibl::CubeMapRGB& radiance, const std::vector<float>& validity,
-                                                 const pipeline::EnvironmentMapSettings& settings,
-                                                 pipeline::CubeStorage storage, double scale, double input_levels,
+                                                 const passes::EnvironmentMapSettings& settings,
+                                                 passes::CubeStorage storage, double scale, double input_levels,
                                                  double unit_roundoff) {
   using detail::mapTexels;
-  const ibl::CosineIrradianceSettings cosine = pipeline::cosineIrradianceSettings(settings);
+  const ibl::CosineIrradianceSettings cosine = passes::cosineIrradianceSettings(settings);
   const int factor = radiance.face_size / settings.prefilter_face_size;
   const size_t r2 = static_cast<size_t>(radiance.face_size) * radiance.face_size;
   const ibl::CubeMapRGB valid = mapTexels(radiance, [&](int face, int x, int y) {
@@ -155,7 +155,7 @@ inline CosineReference cosineIrradianceReference(const ibl::CubeMapRGB& radiance
   const double delta = detail::prefilterWeightDelta(radiance.face_size, factor);
   const double direction_error_rad = 1e-5;
   const double rgb_levels = 0.7, alpha_levels = 0.75;
-  const double alpha_rounding = storage == pipeline::CubeStorage::kSrgb8 ? alpha_levels / 255.0 : std::ldexp(1.0, -11);
+  const double alpha_rounding = storage == passes::CubeStorage::kSrgb8 ? alpha_levels / 255.0 : std::ldexp(1.0, -11);
 
   const ibl::CubeMapRGB pre_p = ibl::downsampleCubeMap(premultiplied, factor);
   const ibl::CubeMapRGB pre_a = ibl::downsampleCubeMap(valid, factor);

@@ -15,7 +15,7 @@
 #include "gles_test_support.hpp"
 #include "ibl/irradiance.hpp"
 #include "ibl/spherical_blur.hpp"
-#include "pipeline/environment_maps.hpp"
+#include "passes/environment_maps.hpp"
 
 namespace probelight {
 namespace {
@@ -62,7 +62,7 @@ struct Comparison {
   double max_tolerance_relative = 0.0;
   double ms = 0.0;
   float scale = 1.0f;
-  pipeline::CubeStorage storage = pipeline::CubeStorage::kSrgb8;
+  passes::CubeStorage storage = passes::CubeStorage::kSrgb8;
   std::string description;
 };
 
@@ -72,16 +72,16 @@ struct Comparison {
 // shader's approximate pow in the encode, at the diffuse map's scale; half
 // floats 2^-11 relative; alpha 0.5 / 255 or 2^-11.
 std::optional<Comparison> runComparison(bool force_8bit, double lamp_gain,
-                                        const pipeline::EnvironmentMapSettings& gpu_settings,
-                                        const pipeline::EnvironmentMapSettings& cpu_settings, std::string& error) {
+                                        const passes::EnvironmentMapSettings& gpu_settings,
+                                        const passes::EnvironmentMapSettings& cpu_settings, std::string& error) {
   const gles::Capabilities caps =
       force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
-  pipeline::EnvironmentMaps maps;
+  passes::EnvironmentMaps maps;
   if (!maps.init(caps, gpu_settings, error)) return std::nullopt;
   Comparison result;
   result.storage = maps.storage();
   result.description = maps.storageDescription();
-  if (!force_8bit && maps.storage() != pipeline::CubeStorage::kLinearHalfFloat) {
+  if (!force_8bit && maps.storage() != passes::CubeStorage::kLinearHalfFloat) {
     error = "skip: " + maps.storageDescription();
     return std::nullopt;
   }
@@ -111,7 +111,7 @@ std::optional<Comparison> runComparison(bool force_8bit, double lamp_gain,
       test::cosineIrradianceReference(room, validity, cpu_settings, maps.storage(), maps.reflection().linear_scale,
                                       0.5, fragmentUnitRoundoff());
   const int n = cpu_settings.diffuse_face_size;
-  const double alpha_output = result.storage == pipeline::CubeStorage::kSrgb8 ? 0.5 / 255.0 : std::ldexp(1.0, -11);
+  const double alpha_output = result.storage == passes::CubeStorage::kSrgb8 ? 0.5 / 255.0 : std::ldexp(1.0, -11);
   for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
     for (int y = 0; y < n; ++y) {
       for (int x = 0; x < n; ++x) {
@@ -147,7 +147,7 @@ class CosineIrradianceTest : public GpuTest, public ::testing::WithParamInterfac
 TEST_P(CosineIrradianceTest, MatchesCpuReferenceWithZenithLampAndBlindSpot) {
   const bool force_8bit = GetParam();
   std::string error;
-  const pipeline::EnvironmentMapSettings settings;
+  const passes::EnvironmentMapSettings settings;
   const auto result = runComparison(force_8bit, lampGain(force_8bit), settings, settings, error);
   if (!result && error.rfind("skip: ", 0) == 0) GTEST_SKIP() << error;
   ASSERT_TRUE(result) << error;
@@ -168,9 +168,9 @@ TEST_P(CosineIrradianceTest, MatchesCpuReferenceWithZenithLampAndBlindSpot) {
 // show it.
 TEST_F(GpuTest, WithoutThePoleCorrectionTheComparisonFails) {
   std::string error;
-  pipeline::EnvironmentMapSettings without;
+  passes::EnvironmentMapSettings without;
   without.pole_direct_deg = 0.0;
-  const auto result = runComparison(false, lampGain(false), without, pipeline::EnvironmentMapSettings{}, error);
+  const auto result = runComparison(false, lampGain(false), without, passes::EnvironmentMapSettings{}, error);
   if (!result && error.rfind("skip: ", 0) == 0) GTEST_SKIP() << error;
   ASSERT_TRUE(result) << error;
   std::printf("[ measure  ] without the pole correction, %s: max relative %.2f%%, excess over the tolerance %.2e\n",
@@ -184,7 +184,7 @@ TEST_P(CosineIrradianceTest, BlindEverywhereGivesZero) {
   const gles::Capabilities caps =
       force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
   std::string error;
-  pipeline::EnvironmentMaps maps;
+  passes::EnvironmentMaps maps;
   ASSERT_TRUE(maps.init(caps, {}, error)) << error;
   const int size = maps.settings().reflection_face_size;
   const std::vector<float> none(static_cast<size_t>(ibl::kCubeFaceCount) * size * size, 0.0f);
@@ -207,8 +207,8 @@ INSTANTIATE_TEST_SUITE_P(Storage, CosineIrradianceTest, ::testing::Values(false,
 
 TEST_F(GpuTest, CosineIrradianceSettingsAreChecked) {
   std::string error;
-  pipeline::EnvironmentMaps maps;
-  pipeline::EnvironmentMapSettings settings;
+  passes::EnvironmentMaps maps;
+  passes::EnvironmentMapSettings settings;
   settings.prefilter_face_size = 24;  // does not divide 64
   EXPECT_FALSE(maps.init(test::sharedCapabilities(), settings, error));
   EXPECT_NE(error.find("prefilter_face_size"), std::string::npos) << error;

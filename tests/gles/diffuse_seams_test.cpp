@@ -22,8 +22,8 @@
 #include "gles_test_support.hpp"
 #include "ibl/cube_map.hpp"
 #include "ibl/mirror_ball.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
 
@@ -70,10 +70,10 @@ bool buildMaps(const World& world, bool force_8bit, BuiltMaps& out, std::string&
   out.view = ibl::MirrorBallView{scene.camera, truth.pose, scene.rig.probe_center_w, scene.rig.probe_radius_m};
   const gles::Capabilities caps =
       force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
-  pipeline::CameraFrameTexture frame;
-  pipeline::EnvironmentMaps maps;
+  passes::CameraFrameTexture frame;
+  passes::EnvironmentMaps maps;
   if (!frame.init(caps, error) || !frame.upload(image, error) || !maps.init(caps, {}, error)) return false;
-  if (force_8bit != (maps.storage() == pipeline::CubeStorage::kSrgb8)) {
+  if (force_8bit != (maps.storage() == passes::CubeStorage::kSrgb8)) {
     error = "storage is not the one asked for: " + maps.storageDescription();
     return false;
   }

@@ -11,8 +11,8 @@
 #include "gles_test_support.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_to_cube.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
 
 namespace probelight {
 namespace {
@@ -98,12 +98,12 @@ TEST_P(ProbeToCubeTest, MatchesCpuReferenceOnASyntheticBall) {
   const ibl::MirrorBallView view = testBallView();
   const ImageRGB8 image = renderBallImage(view);
   std::string error;
-  pipeline::CameraFrameTexture frame;
+  passes::CameraFrameTexture frame;
   ASSERT_TRUE(frame.init(caps, error)) << error;
   ASSERT_TRUE(frame.upload(image, error)) << error;
-  pipeline::EnvironmentMaps maps;
+  passes::EnvironmentMaps maps;
   ASSERT_TRUE(maps.init(caps, {}, error)) << error;
-  if (!force_8bit && maps.storage() != pipeline::CubeStorage::kLinearHalfFloat) {
+  if (!force_8bit && maps.storage() != passes::CubeStorage::kLinearHalfFloat) {
     GTEST_SKIP() << "this GPU cannot render half floats: " << maps.storageDescription();
   }
   const auto gpu_start = std::chrono::steady_clock::now();
@@ -207,11 +207,11 @@ TEST_F(ProbeToCubeTransfer, GammaCurveMatchesTheCpuReference) {
   const ibl::MirrorBallView view = testBallView();
   const ImageRGB8 image = renderBallImage(view);
   std::string error;
-  pipeline::CameraFrameTexture frame;
+  passes::CameraFrameTexture frame;
   ASSERT_TRUE(frame.init(caps, error) && frame.upload(image, error)) << error;
-  pipeline::EnvironmentMapSettings settings;
+  passes::EnvironmentMapSettings settings;
   settings.camera_transfer = {ibl::CameraTransfer::Curve::kGamma, 1.8};
-  pipeline::EnvironmentMaps gamma_maps, srgb_maps;
+  passes::EnvironmentMaps gamma_maps, srgb_maps;
   ASSERT_TRUE(gamma_maps.init(caps, settings, error)) << error;
   ASSERT_TRUE(srgb_maps.init(caps, {}, error)) << error;
   ASSERT_TRUE(gamma_maps.updateReflection(frame, view, kProbeReflectance, error)) << error;

@@ -33,7 +33,7 @@
 #include "cosine_irradiance_reference.hpp"
 #include "gles_test_support.hpp"
 #include "ibl/glossy_maps.hpp"
-#include "pipeline/environment_maps.hpp"
+#include "passes/environment_maps.hpp"
 
 namespace probelight {
 namespace {
@@ -63,10 +63,10 @@ TEST_P(GlossyMapsTest, MatchesCpuReference) {
   const gles::Capabilities caps =
       force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
   std::string error;
-  pipeline::EnvironmentMaps maps;
-  const pipeline::EnvironmentMapSettings settings;
+  passes::EnvironmentMaps maps;
+  const passes::EnvironmentMapSettings settings;
   ASSERT_TRUE(maps.init(caps, settings, error)) << error;
-  if (!force_8bit && maps.storage() != pipeline::CubeStorage::kLinearHalfFloat)
+  if (!force_8bit && maps.storage() != passes::CubeStorage::kLinearHalfFloat)
     GTEST_SKIP() << maps.storageDescription();
   // 8-bit maps hold up to their brightest texel; a 10x lamp keeps the sky
   // tens of levels deep (as cosine_irradiance_test.cpp).
@@ -89,7 +89,7 @@ TEST_P(GlossyMapsTest, MatchesCpuReference) {
   const int bits = c.fragment_highp ? c.fragment_highp_mantissa_bits : c.fragment_mediump_mantissa_bits;
   const double u = std::ldexp(1.0, -(std::max(bits, 10) + 1));
   for (int level = 0; level < settings.glossy_levels; ++level) {
-    const ibl::GlossyLevelSettings lobe = pipeline::glossyLevelSettings(settings, level);
+    const ibl::GlossyLevelSettings lobe = passes::glossyLevelSettings(settings, level);
     const ibl::CubeMapRGB want = ibl::glossyMap(*input, lobe, &input_validity);
     std::vector<float> alpha;
     const auto got = maps.readGlossy(level, error, &alpha);
@@ -107,7 +107,7 @@ TEST_P(GlossyMapsTest, MatchesCpuReference) {
           for (int ch = 0; ch < 3; ++ch) {
             const double v = want.texel(face, x, y)[ch];
             double storage;
-            if (maps.storage() == pipeline::CubeStorage::kLinearHalfFloat) {
+            if (maps.storage() == passes::CubeStorage::kLinearHalfFloat) {
               storage = 3.0 * v * std::ldexp(1.0, -11);
             } else {
               const double e0 = test::storageRoundingBound(maps.storage(), 0.0, scale, 0.7);
@@ -141,8 +141,8 @@ INSTANTIATE_TEST_SUITE_P(Storage, GlossyMapsTest, ::testing::Values(false, true)
 TEST_F(GpuTest, GlossyLevelTimes) {
   for (int levels : {1, 2}) {
     std::string error;
-    pipeline::EnvironmentMaps maps;
-    pipeline::EnvironmentMapSettings settings;
+    passes::EnvironmentMaps maps;
+    passes::EnvironmentMapSettings settings;
     settings.glossy_levels = levels;
     ASSERT_TRUE(maps.init(test::sharedCapabilities(), settings, error)) << error;
     ASSERT_TRUE(maps.setReflection(lampRoom(settings.reflection_face_size, 10.0), error)) << error;
@@ -163,8 +163,8 @@ TEST_F(GpuTest, GlossyLevelTimes) {
 
 TEST_F(GpuTest, GlossySettingsAreChecked) {
   std::string error;
-  pipeline::EnvironmentMaps maps;
-  pipeline::EnvironmentMapSettings settings;
+  passes::EnvironmentMaps maps;
+  passes::EnvironmentMapSettings settings;
   settings.glossy_face_size[1] = 24;  // does not divide 64
   EXPECT_FALSE(maps.init(test::sharedCapabilities(), settings, error));
   EXPECT_NE(error.find("glossy_face_size"), std::string::npos) << error;

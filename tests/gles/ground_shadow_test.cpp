@@ -14,9 +14,9 @@
 #include "gles_test_support.hpp"
 #include "ibl/ground_shadow.hpp"
 #include "ibl/light_dome.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/ground_shadow.hpp"
-#include "pipeline/object_compositor.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/ground_shadow.hpp"
+#include "passes/object_compositor.hpp"
 #include "ibl/camera_projection.hpp"
 #include "ibl/color_transfer.hpp"
 
@@ -51,7 +51,7 @@ struct Comparison {
   double mean_abs = 0.0, max_abs = 0.0, p99_abs = 0.0;
 };
 
-Comparison compareWithReference(const pipeline::GroundShadow& shadow, const std::vector<glm::vec3>& fraction,
+Comparison compareWithReference(const passes::GroundShadow& shadow, const std::vector<glm::vec3>& fraction,
                                 const ibl::ShadowCaster& caster, const std::vector<ibl::ShadowLight>& lights) {
   Comparison result;
   const int n = shadow.groundTextureSizePx();
@@ -92,7 +92,7 @@ class GroundShadowTest : public GpuTest, public ::testing::WithParamInterface<bo
 TEST_P(GroundShadowTest, OverheadLightCastsTheDiscUnderTheSphere) {
   const bool packed = GetParam();
   if (!packed && !test::sharedCapabilities().depth_texture) GTEST_SKIP() << "no OES_depth_texture here";
-  pipeline::GroundShadow shadow;
+  passes::GroundShadow shadow;
   std::string error;
   ASSERT_TRUE(shadow.init(capabilities(), {}, error)) << error;
   ASSERT_EQ(shadow.packedDepth(), packed);
@@ -133,7 +133,7 @@ TEST_P(GroundShadowTest, OverheadLightCastsTheDiscUnderTheSphere) {
 TEST_P(GroundShadowTest, DomeShadowMatchesTheReferenceForASphereAndABox) {
   const bool packed = GetParam();
   if (!packed && !test::sharedCapabilities().depth_texture) GTEST_SKIP() << "no OES_depth_texture here";
-  pipeline::GroundShadow shadow;
+  passes::GroundShadow shadow;
   std::string error;
   ASSERT_TRUE(shadow.init(capabilities(), {}, error)) << error;
   ASSERT_EQ(shadow.packedDepth(), packed);
@@ -183,7 +183,7 @@ TEST_F(GpuTest, LightsInSeveralBatchesGiveTheSameFraction) {
   for (int units : {16, 3}) {
     gles::Capabilities capabilities = test::sharedCapabilities();
     capabilities.max_fragment_texture_units = units;
-    pipeline::GroundShadow shadow;
+    passes::GroundShadow shadow;
     ASSERT_TRUE(shadow.init(capabilities, {}, error)) << error;
     EXPECT_EQ(shadow.lightsPerBatch(), std::min(units, 8));
     ASSERT_TRUE(shadow.update(lights, sphere, error)) << error;
@@ -210,12 +210,12 @@ TEST_F(GpuTest, CompositeDarkensTheCameraPixelsByTheFractionInLinearLight) {
   ImageRGB8 frame;
   frame.resize(camera.width_px, camera.height_px);
   std::fill(frame.pixels.begin(), frame.pixels.end(), std::uint8_t{180});
-  pipeline::CameraFrameTexture texture;
+  passes::CameraFrameTexture texture;
   ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
   ASSERT_TRUE(texture.upload(frame, error)) << error;
-  pipeline::ObjectCompositor compositor;
-  ASSERT_TRUE(compositor.init(test::sharedCapabilities(), {}, pipeline::CubeStorage::kSrgb8, error)) << error;
-  pipeline::GroundShadow shadow;
+  passes::ObjectCompositor compositor;
+  ASSERT_TRUE(compositor.init(test::sharedCapabilities(), {}, passes::CubeStorage::kSrgb8, error)) << error;
+  passes::GroundShadow shadow;
   ASSERT_TRUE(shadow.init(test::sharedCapabilities(), {}, error)) << error;
   ibl::ShadowLight overhead;
   overhead.direction_w = {0, 0, 1};
@@ -255,7 +255,7 @@ TEST_F(GpuTest, CompositeDarkensTheCameraPixelsByTheFractionInLinearLight) {
 // the region's cap cuts off, a tiny one, one far from the tag.
 TEST_F(GpuTest, ShadowStaysFiniteForGrazingLightsAndOddObjects) {
   std::string error;
-  pipeline::GroundShadow shadow;
+  passes::GroundShadow shadow;
   ASSERT_TRUE(shadow.init(test::sharedCapabilities(), {}, error)) << error;
   ibl::ShadowLight grazing;
   grazing.direction_w = glm::normalize(glm::dvec3(1.0, 0.2, 1e-5));
@@ -294,7 +294,7 @@ TEST_F(GpuTest, ShadowStaysFiniteForGrazingLightsAndOddObjects) {
 
 TEST_F(GpuTest, NoLightsMeansNoShadowAndNothingDrawn) {
   std::string error;
-  pipeline::GroundShadow shadow;
+  passes::GroundShadow shadow;
   ASSERT_TRUE(shadow.init(test::sharedCapabilities(), {}, error)) << error;
   ASSERT_TRUE(shadow.update({}, ibl::ShadowCaster{}, error)) << error;
   EXPECT_FALSE(shadow.hasShadow());

@@ -15,9 +15,9 @@
 #include "gles_test_support.hpp"
 #include "ibl/camera_projection.hpp"
 #include "ibl/surface_shading.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
-#include "pipeline/object_compositor.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
+#include "passes/object_compositor.hpp"
 
 namespace probelight {
 namespace {
@@ -40,9 +40,9 @@ ImageRGB8 asymmetricImage(int width, int height) {
 
 struct Stage4 {
   gles::RenderTarget target;
-  pipeline::CameraFrameTexture frame;
-  pipeline::EnvironmentMaps maps;
-  pipeline::ObjectCompositor compositor;
+  passes::CameraFrameTexture frame;
+  passes::EnvironmentMaps maps;
+  passes::ObjectCompositor compositor;
 };
 
 void initStage4(Stage4& stage, const gles::Capabilities& caps, int width, int height) {

@@ -8,7 +8,7 @@
 #include "gles/gl_objects.hpp"
 #include "gles/render_target.hpp"
 #include "gles_test_support.hpp"
-#include "pipeline/environment_maps.hpp"
+#include "passes/environment_maps.hpp"
 
 namespace probelight {
 namespace {
@@ -50,9 +50,9 @@ TEST_F(GpuTest, CapabilitiesAreCoherent) {
 
 TEST_F(GpuTest, MaskedCapabilitiesSelectThe8BitStorage) {
   std::string error;
-  pipeline::EnvironmentMaps maps;
+  passes::EnvironmentMaps maps;
   ASSERT_TRUE(maps.init(test::sharedCapabilities().withoutExtensions(), {}, error)) << error;
-  EXPECT_EQ(maps.storage(), pipeline::CubeStorage::kSrgb8);
+  EXPECT_EQ(maps.storage(), passes::CubeStorage::kSrgb8);
 }
 
 TEST_F(GpuTest, ShaderCompileErrorNamesTheFileAndCarriesTheLog) {

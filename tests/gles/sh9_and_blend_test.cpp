@@ -19,7 +19,7 @@
 #include "ibl/irradiance.hpp"
 #include "ibl/spherical_blur.hpp"
 #include "ibl/spherical_harmonics.hpp"
-#include "pipeline/environment_maps.hpp"
+#include "passes/environment_maps.hpp"
 
 namespace probelight {
 namespace {
@@ -67,15 +67,15 @@ double fragmentUnitRoundoff() {
 //    (llvmpipe's approximate pow) adds up to 0.1 level (as measured for the
 //    probe stage on a flat image, tests/gles/environment_maps_test.cpp):
 //    0.6 level times the sRGB decode slope there, times the map's scale.
-double storageTolerance(pipeline::CubeStorage storage, double expected, double linear_scale) {
-  if (storage == pipeline::CubeStorage::kLinearHalfFloat) return std::abs(expected) * std::ldexp(1.0, -11);
+double storageTolerance(passes::CubeStorage storage, double expected, double linear_scale) {
+  if (storage == passes::CubeStorage::kLinearHalfFloat) return std::abs(expected) * std::ldexp(1.0, -11);
   const double encoded = ibl::linearToSrgb(std::max(0.0, expected) / linear_scale);
   return linear_scale * test::srgbDecodeSlope(std::min(1.0, encoded + 0.6 / 255.0)) * 0.6 / 255.0;
 }
 
 // Alpha: exact for 1 in both storages; otherwise 0.5 / 255 (RGBA8) or 2^-11.
-double alphaTolerance(pipeline::CubeStorage storage) {
-  return storage == pipeline::CubeStorage::kSrgb8 ? 0.5 / 255.0 + 1e-6 : std::ldexp(1.0, -11);
+double alphaTolerance(passes::CubeStorage storage) {
+  return storage == passes::CubeStorage::kSrgb8 ? 0.5 / 255.0 + 1e-6 : std::ldexp(1.0, -11);
 }
 
 // Bound on the shader's evaluation error of the SH9 polynomial, per channel:
@@ -95,7 +95,7 @@ struct MapComparison {
 
 MapComparison compareMaps(const ibl::CubeMapRGB& gpu, const std::vector<float>& gpu_alpha,
                           const ibl::CubeMapRGB& expected, const std::vector<float>& expected_alpha,
-                          pipeline::CubeStorage storage, double linear_scale, const glm::dvec3& arithmetic_tolerance) {
+                          passes::CubeStorage storage, double linear_scale, const glm::dvec3& arithmetic_tolerance) {
   MapComparison result;
   const int n = expected.face_size;
   for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
@@ -124,14 +124,14 @@ double medianMs(std::vector<double> times) {
 class Sh9DiffuseTest : public GpuTest, public ::testing::WithParamInterface<bool> {
  protected:
   // Maps for the storage under test; nullopt (test skipped) when native half floats are missing.
-  std::optional<pipeline::EnvironmentMaps> makeMaps() {
+  std::optional<passes::EnvironmentMaps> makeMaps() {
     const bool force_8bit = GetParam();
     const gles::Capabilities caps =
         force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
     std::string error;
-    std::optional<pipeline::EnvironmentMaps> maps(std::in_place);
+    std::optional<passes::EnvironmentMaps> maps(std::in_place);
     EXPECT_TRUE(maps->init(caps, {}, error)) << error;
-    if (!force_8bit && maps->storage() != pipeline::CubeStorage::kLinearHalfFloat) return std::nullopt;
+    if (!force_8bit && maps->storage() != passes::CubeStorage::kLinearHalfFloat) return std::nullopt;
     return maps;
   }
 };
@@ -195,7 +195,7 @@ TEST_P(Sh9DiffuseTest, MatchesCpuReferenceAndIsTimed) {
               medianMs(readback_ms) + medianMs(project_ms) + medianMs(render_ms), medianMs(blur_ms));
   EXPECT_LE(result.max_excess, 0.0);
   EXPECT_EQ(result.max_alpha_error, 0.0);  // alpha 1 is exact in both storages
-  if (maps->storage() == pipeline::CubeStorage::kSrgb8) {
+  if (maps->storage() == passes::CubeStorage::kSrgb8) {
     // The scale is the largest stored value: the lamp side exceeds 1 and
     // must not clip.
     float largest = 0.0f;
@@ -226,7 +226,7 @@ struct DiffuseState {
   double scale = 1.0;
 };
 
-std::optional<DiffuseState> readDiffuseState(const pipeline::EnvironmentMaps& maps, std::string& error) {
+std::optional<DiffuseState> readDiffuseState(const passes::EnvironmentMaps& maps, std::string& error) {
   DiffuseState state;
   auto rgb = maps.readDiffuse(error, &state.alpha);
   if (!rgb) return std::nullopt;
@@ -249,7 +249,7 @@ enum class Method { kBlur, kSH9 };
 
 // Uploads `environment` and updates the diffuse map with `method` at
 // `new_weight`; fills `fresh` with the CPU reference of the new map alone.
-bool updateWith(pipeline::EnvironmentMaps& maps, Method method, const ibl::CubeMapRGB& environment,
+bool updateWith(passes::EnvironmentMaps& maps, Method method, const ibl::CubeMapRGB& environment,
                 const std::vector<float>* validity, float new_weight, FreshReference* fresh, std::string& error) {
   if (!maps.setReflection(environment, error, validity)) return false;
   const int n = maps.settings().diffuse_face_size;
@@ -289,14 +289,14 @@ bool updateWith(pipeline::EnvironmentMaps& maps, Method method, const ibl::CubeM
 
 class DiffuseBlendTest : public GpuTest, public ::testing::WithParamInterface<std::tuple<bool, Method>> {
  protected:
-  std::optional<pipeline::EnvironmentMaps> makeMaps() {
+  std::optional<passes::EnvironmentMaps> makeMaps() {
     const bool force_8bit = std::get<0>(GetParam());
     const gles::Capabilities caps =
         force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
     std::string error;
-    std::optional<pipeline::EnvironmentMaps> maps(std::in_place);
+    std::optional<passes::EnvironmentMaps> maps(std::in_place);
     EXPECT_TRUE(maps->init(caps, {}, error)) << error;
-    if (!force_8bit && maps->storage() != pipeline::CubeStorage::kLinearHalfFloat) return std::nullopt;
+    if (!force_8bit && maps->storage() != passes::CubeStorage::kLinearHalfFloat) return std::nullopt;
     return maps;
   }
   Method method() const { return std::get<1>(GetParam()); }
@@ -390,7 +390,7 @@ TEST_P(DiffuseBlendTest, StepChangeBlendsLinearly) {
   }
   ASSERT_TRUE(test::allFinite(result->rgb));
 
-  const pipeline::CubeStorage storage = maps->storage();
+  const passes::CubeStorage storage = maps->storage();
   const double u = fragmentUnitRoundoff();
   const int n = maps->settings().diffuse_face_size;
   ibl::CubeMapRGB expected(n);
@@ -414,7 +414,7 @@ TEST_P(DiffuseBlendTest, StepChangeBlendsLinearly) {
           const double want = prev + kWeight * (now - prev);
           double tolerance = storageTolerance(storage, want, result->scale) + kWeight * fresh.arithmetic.texel(face, x, y)[c] +
                              4.0 * u * std::max(std::abs(prev), std::abs(now));
-          if (storage == pipeline::CubeStorage::kSrgb8) {
+          if (storage == passes::CubeStorage::kSrgb8) {
             const double encoded = ibl::linearToSrgb(prev / previous->scale);
             tolerance += (1.0 - kWeight) * previous->scale *
                          test::srgbDecodeSlope(std::min(1.0, encoded + kPreviousFetchLevels / 255.0)) *
@@ -435,7 +435,7 @@ TEST_P(DiffuseBlendTest, StepChangeBlendsLinearly) {
         }
         const double want_alpha = previous->alpha[i] + kWeight * (fresh.alpha[i] - previous->alpha[i]);
         double alpha_tolerance = alphaTolerance(storage) + kWeight * fresh.alpha_arithmetic[i] + 4.0 * u;
-        if (storage == pipeline::CubeStorage::kSrgb8) alpha_tolerance += (1.0 - kWeight) * kPreviousFetchLevels / 255.0;
+        if (storage == passes::CubeStorage::kSrgb8) alpha_tolerance += (1.0 - kWeight) * kPreviousFetchLevels / 255.0;
         max_alpha_excess = std::max(max_alpha_excess, std::abs(result->alpha[i] - want_alpha) - alpha_tolerance);
       }
     }
@@ -447,7 +447,7 @@ TEST_P(DiffuseBlendTest, StepChangeBlendsLinearly) {
               100.0 * byte_blend_max);
   EXPECT_LE(max_excess, 0.0);
   EXPECT_LE(max_alpha_excess, 0.0);
-  if (storage == pipeline::CubeStorage::kSrgb8) {
+  if (storage == passes::CubeStorage::kSrgb8) {
     // The blended scale bounds the blend: w * new scale + (1 - w) * previous.
     double new_scale = 1.0;
     if (method() == Method::kBlur) {
@@ -497,7 +497,7 @@ TEST_P(DiffuseBlendTest, RepeatedUpdatesConvergeToTheDeadBand) {
     glFinish();
     unblended_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   }
-  const pipeline::CubeStorage storage = maps->storage();
+  const passes::CubeStorage storage = maps->storage();
   const int n = maps->settings().diffuse_face_size;
   double worst_levels = 0.0;
   double worst_relative = 0.0;
@@ -510,7 +510,7 @@ TEST_P(DiffuseBlendTest, RepeatedUpdatesConvergeToTheDeadBand) {
           const double got = result->rgb.texel(face, x, y)[c];
           const double error_linear = std::abs(got - want);
           double tolerance = fresh.arithmetic.texel(face, x, y)[c] + 2e-5 * std::abs(want);  // + the 0.7^30 remainder
-          if (storage == pipeline::CubeStorage::kSrgb8) {
+          if (storage == passes::CubeStorage::kSrgb8) {
             const double levels =
                 255.0 * std::abs(ibl::linearToSrgb(got / result->scale) - ibl::linearToSrgb(want / result->scale));
             worst_levels = std::max(worst_levels, levels);

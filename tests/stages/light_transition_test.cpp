@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "app/light_transition.hpp"
+#include "stages/light_transition.hpp"
 
 namespace probelight {
 namespace {

@@ -1,4 +1,4 @@
-#include "app/light_transition.hpp"
+#include "stages/light_transition.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "app/state_store.hpp"
+#include "stages/state_store.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "pipeline/environment_maps.hpp"
+#include "passes/environment_maps.hpp"
 
 #include <algorithm>
 #include <array>
@@ -12,7 +12,7 @@
 #include "ibl/camera_projection.hpp"
 #include "ibl/color_transfer.hpp"
 
-namespace probelight::pipeline {
+namespace probelight::passes {
 
 namespace {
 
@@ -670,4 +670,4 @@ std::optional<ibl::CubeMapRGB> EnvironmentMaps::readGlossy(int level, std::strin
   return readCube(glossy_[static_cast<size_t>(level)].map, error, validity);
 }
 
-}  // namespace probelight::pipeline
+}  // namespace probelight::passes

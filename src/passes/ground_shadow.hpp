@@ -25,9 +25,9 @@
 #include "gles/gl_objects.hpp"
 #include "ibl/color_transfer.hpp"
 #include "ibl/ground_shadow.hpp"
-#include "pipeline/camera_frame_texture.hpp"
+#include "passes/camera_frame_texture.hpp"
 
-namespace probelight::pipeline {
+namespace probelight::passes {
 
 struct GroundShadowSettings {
   int shadow_map_size_px = 256;       // the object's bounding sphere fills it: 0.3 mm texels for a 7 cm sphere
@@ -116,4 +116,4 @@ LightView lightViewFor(const glm::dvec3& direction_w, const glm::dvec3& centre_w
 // `segments` around (segments / 2 rings), or a box's 12 triangles.
 std::vector<glm::vec3> casterTriangles(const ibl::ShadowCaster& caster, int segments = 48);
 
-}  // namespace probelight::pipeline
+}  // namespace probelight::passes

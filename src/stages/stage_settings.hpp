@@ -4,29 +4,29 @@
 // numbers can be compared.
 #pragma once
 
-#include "app/app_settings.hpp"
+#include "stages/pipeline_settings.hpp"
 #include "core/types.hpp"
 #include "ibl/surface_shading.hpp"
-#include "pipeline/environment_maps.hpp"
-#include "pipeline/ground_shadow.hpp"
+#include "passes/environment_maps.hpp"
+#include "passes/ground_shadow.hpp"
 #include "tracking/tag_detector.hpp"
 
 namespace probelight {
 
 // The detector settings of probelight.yaml's `tracking` section, with the
 // family the rig names (the tracker insists they agree).
-tracking::TagDetectorSettings tagDetectorSettings(const AppSettings& settings, const RigGeometry& rig);
+tracking::TagDetectorSettings tagDetectorSettings(const PipelineSettings& settings, const RigGeometry& rig);
 
 // The `environment_maps` section as the GPU stages take it (force_8bit is not
 // here: it changes the capabilities the stages are given, not their settings).
 // Glossy maps are allocated only when the object's material reads them.
-pipeline::EnvironmentMapSettings environmentMapSettings(const AppSettings& settings);
+passes::EnvironmentMapSettings environmentMapSettings(const PipelineSettings& settings);
 
 // The `object` section as the shading takes it.
-ibl::SurfaceMaterial objectMaterial(const AppSettings& settings);
+ibl::SurfaceMaterial objectMaterial(const PipelineSettings& settings);
 
 // The `lights` section's shadow settings, with the camera's transfer (the
 // composite decodes and re-encodes camera pixels).
-pipeline::GroundShadowSettings groundShadowSettings(const AppSettings& settings);
+passes::GroundShadowSettings groundShadowSettings(const PipelineSettings& settings);
 
 }  // namespace probelight

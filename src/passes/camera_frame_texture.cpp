@@ -1,4 +1,4 @@
-#include "pipeline/camera_frame_texture.hpp"
+#include "passes/camera_frame_texture.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -9,7 +9,7 @@
 #define GL_UNPACK_ROW_LENGTH_EXT 0x0CF2
 #endif
 
-namespace probelight::pipeline {
+namespace probelight::passes {
 namespace {
 
 // DRM fourccs, spelled out so that the pipeline does not need libdrm's
@@ -334,4 +334,4 @@ void CameraFrameTexture::forgetImportedBuffers() {
   imported_.clear();
 }
 
-}  // namespace probelight::pipeline
+}  // namespace probelight::passes

@@ -30,7 +30,7 @@
 #include "gles/capabilities.hpp"
 #include "gles/gl_objects.hpp"
 
-namespace probelight::pipeline {
+namespace probelight::passes {
 
 enum class FrameUploadPath { kNone, kRgbUpload, kYuvUpload, kDmabufImport };
 const char* toString(FrameUploadPath path);
@@ -112,4 +112,4 @@ class CameraFrameTexture {
   PFNGLEGLIMAGETARGETTEXTURE2DOESPROC image_target_texture_ = nullptr;
 };
 
-}  // namespace probelight::pipeline
+}  // namespace probelight::passes

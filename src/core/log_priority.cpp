@@ -1,4 +1,4 @@
-#include "app/log_priority.hpp"
+#include "core/log_priority.hpp"
 
 #include <sys/stat.h>
 #include <unistd.h>

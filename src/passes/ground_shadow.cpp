@@ -1,4 +1,4 @@
-#include "pipeline/ground_shadow.hpp"
+#include "passes/ground_shadow.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <glm/gtc/type_ptr.hpp>
 
-namespace probelight::pipeline {
+namespace probelight::passes {
 
 namespace {
 
@@ -419,4 +419,4 @@ glm::dvec2 GroundShadow::groundPointOfTexel(int i, int j) const {
   return region_.centre_w + region_.half_size_m * glm::dvec2((2.0 * i + 1.0) / n - 1.0, (2.0 * j + 1.0) / n - 1.0);
 }
 
-}  // namespace probelight::pipeline
+}  // namespace probelight::passes

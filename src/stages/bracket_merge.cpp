@@ -1,4 +1,4 @@
-#include "app/bracket_merge.hpp"
+#include "stages/bracket_merge.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "app/map_update_policy.hpp"
+#include "stages/map_update_policy.hpp"
 
 namespace probelight {
 namespace {

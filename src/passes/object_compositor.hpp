@@ -17,10 +17,10 @@
 #include "gles/gl_objects.hpp"
 #include "ibl/ground_shadow.hpp"
 #include "ibl/surface_shading.hpp"
-#include "pipeline/camera_frame_texture.hpp"
-#include "pipeline/environment_maps.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
 
-namespace probelight::pipeline {
+namespace probelight::passes {
 
 struct ObjectCompositorSettings {
   // 64 x 32 facets: the chord of a 100 px-radius silhouette sags by
@@ -89,4 +89,4 @@ class ObjectCompositor {
 // flat-shaded triangles with outward normals.
 std::vector<ObjectCompositor::MeshVertex> boxMesh(const ibl::ShadowCaster& box);
 
-}  // namespace probelight::pipeline
+}  // namespace probelight::passes

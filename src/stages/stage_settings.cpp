@@ -1,10 +1,10 @@
-#include "app/stage_settings.hpp"
+#include "stages/stage_settings.hpp"
 
 #include <algorithm>
 
 namespace probelight {
 
-tracking::TagDetectorSettings tagDetectorSettings(const AppSettings& settings, const RigGeometry& rig) {
+tracking::TagDetectorSettings tagDetectorSettings(const PipelineSettings& settings, const RigGeometry& rig) {
   tracking::TagDetectorSettings detector;
   detector.family = rig.tag_family;
   detector.quad_decimate = static_cast<float>(settings.tracking.quad_decimate);
@@ -17,8 +17,8 @@ tracking::TagDetectorSettings tagDetectorSettings(const AppSettings& settings, c
   return detector;
 }
 
-pipeline::EnvironmentMapSettings environmentMapSettings(const AppSettings& settings) {
-  pipeline::EnvironmentMapSettings stages = settings.maps.stages;
+passes::EnvironmentMapSettings environmentMapSettings(const PipelineSettings& settings) {
+  passes::EnvironmentMapSettings stages = settings.maps.stages;
   if (!ibl::needsGlossy(objectMaterial(settings))) stages.glossy_levels = 0;
   // A glossy level is never finer than the reflection map it filters; at a
   // smaller face_size it takes the map's own size (which divides it).
@@ -26,7 +26,7 @@ pipeline::EnvironmentMapSettings environmentMapSettings(const AppSettings& setti
   return stages;
 }
 
-ibl::SurfaceMaterial objectMaterial(const AppSettings& settings) {
+ibl::SurfaceMaterial objectMaterial(const PipelineSettings& settings) {
   ibl::SurfaceMaterial material;
   material.albedo = glm::vec3(settings.object.albedo);
   material.k_specular = static_cast<float>(settings.object.k_specular);
@@ -40,8 +40,8 @@ ibl::SurfaceMaterial objectMaterial(const AppSettings& settings) {
 
 namespace probelight {
 
-pipeline::GroundShadowSettings groundShadowSettings(const AppSettings& settings) {
-  pipeline::GroundShadowSettings shadow;
+passes::GroundShadowSettings groundShadowSettings(const PipelineSettings& settings) {
+  passes::GroundShadowSettings shadow;
   shadow.shadow_map_size_px = settings.lights.shadow_map_size_px;
   shadow.ground_texture_size_px = settings.lights.ground_texture_size_px;
   shadow.max_region_half_size_m = settings.lights.max_shadow_reach_m;

@@ -1,4 +1,4 @@
-#include "pipeline/object_compositor.hpp"
+#include "passes/object_compositor.hpp"
 
 #include <cmath>
 #include <string>
@@ -7,7 +7,7 @@
 #include <glm/gtc/constants.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
-namespace probelight::pipeline {
+namespace probelight::passes {
 
 bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const ObjectCompositorSettings& settings,
                             CubeStorage storage, std::string& error) {
@@ -275,4 +275,4 @@ std::vector<ObjectCompositor::MeshVertex> boxMesh(const ibl::ShadowCaster& box) 
   return triangles;
 }
 
-}  // namespace probelight::pipeline
+}  // namespace probelight::passes

@@ -73,9 +73,9 @@
 #include "ibl/mirror_ball.hpp"
 #include "ibl/spherical_blur.hpp"
 #include "ibl/spherical_harmonics.hpp"
-#include "pipeline/camera_frame_texture.hpp"
+#include "passes/camera_frame_texture.hpp"
 
-namespace probelight::pipeline {
+namespace probelight::passes {
 
 // The diffuse fields are ibl::CosineIrradianceSettings' (same defaults; see
 // cosineIrradianceSettings below).
@@ -216,4 +216,4 @@ class EnvironmentMaps {
 // GLSL #define lines selecting a storage's encoding in cube_storage.glsl.
 std::string cubeStorageDefines(CubeStorage storage);
 
-}  // namespace probelight::pipeline
+}  // namespace probelight::passes

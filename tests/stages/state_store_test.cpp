@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "app/state_store.hpp"
+#include "stages/state_store.hpp"
 
 namespace probelight {
 namespace {

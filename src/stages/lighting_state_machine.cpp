@@ -1,4 +1,4 @@
-#include "app/lighting_state_machine.hpp"
+#include "stages/lighting_state_machine.hpp"
 
 namespace probelight {
 

@@ -1,4 +1,4 @@
-#include "app/run_report.hpp"
+#include "stages/run_report.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "app/map_update_policy.hpp"
+#include "stages/map_update_policy.hpp"
 
 #include <algorithm>
 #include <cmath>

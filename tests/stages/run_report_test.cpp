@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "app/run_report.hpp"
+#include "stages/run_report.hpp"
 
 namespace probelight {
 namespace {

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "app/lighting_state_machine.hpp"
+#include "stages/lighting_state_machine.hpp"
 
 namespace probelight {
 namespace {
