@@ -448,25 +448,35 @@ bool updateDiffuseMap(passes::EnvironmentMaps& maps, bool sh9, std::string& erro
   return reflection && maps.updateDiffuseFromSH9(ibl::projectToSH9(*reflection, &validity), error);
 }
 
-void diffuseBlur(benchmark::State& state, bool eight_bit, int face_size, int half_taps, bool sh9 = false) {
+// The diffuse benchmarks' name: "face" is the diffuse map's size; the
+// intermediate map (after the east pass) is named only where it differs from
+// it ("diffuse_blur/half/face:16/half_taps:16" has a 16² intermediate map,
+// "diffuse_blur/half/intermediate:32/face:16/half_taps:16" the app's 32²).
+std::string diffuseName(bool eight_bit, int intermediate_face_size, int face_size, int half_taps, bool sh9) {
+  const std::string storage = eight_bit ? "8bit" : "half";
+  if (sh9) return "diffuse_sh9/" + storage + "/face:" + std::to_string(face_size);
+  return "diffuse_blur/" + storage +
+         (intermediate_face_size != face_size ? "/intermediate:" + std::to_string(intermediate_face_size) : "") +
+         "/face:" + std::to_string(face_size) + "/half_taps:" + std::to_string(half_taps);
+}
+
+void diffuseBlur(benchmark::State& state, bool eight_bit, int intermediate_face_size, int face_size, int half_taps,
+                 bool sh9 = false) {
   if (!requireGl(state)) return;
   Setup& s = setup();
   const gles::Capabilities& capabilities = eight_bit ? s.capabilities_8bit : s.capabilities_full;
   std::string error;
   FrameTextures frames;
   passes::EnvironmentMaps maps;
-  passes::EnvironmentMapSettings settings;  // reflection 64, 4 iterations
-  settings.intermediate_face_size = face_size;
+  passes::EnvironmentMapSettings settings;  // reflection 64, prefilter 16, 4 iterations, pole_direct 20 deg
+  settings.intermediate_face_size = intermediate_face_size;
   settings.diffuse_face_size = face_size;
   settings.blur_half_taps = half_taps;
   if (!frames.init(capabilities, error) || !maps.init(capabilities, settings, error)) {
     state.SkipWithError(error.c_str());
     return;
   }
-  const std::string name = sh9 ? std::string("diffuse_sh9/") + (eight_bit ? "8bit" : "half") + "/face:" +
-                                     std::to_string(face_size)
-                               : std::string("diffuse_blur/") + (eight_bit ? "8bit" : "half") + "/face:" +
-                                     std::to_string(face_size) + "/half_taps:" + std::to_string(half_taps);
+  const std::string name = diffuseName(eight_bit, intermediate_face_size, face_size, half_taps, sh9);
   bool failed = false;
   const ErrorRow& row = errorsFor(name, [&] {
     ErrorRow r;
@@ -831,7 +841,7 @@ void printErrorTable() {
   if (errorTable().empty()) return;
   std::printf("\nError against the simulator's truth (per configuration; deterministic, so not repeated):\n");
   for (const auto& [name, row] : errorTable()) {
-    std::printf("  %-40s", name.c_str());
+    std::printf("  %-56s", name.c_str());
     for (const auto& [key, value] : row.values) std::printf("  %s=%.3f", key.c_str(), value);
     std::printf("\n");
   }
@@ -879,25 +889,39 @@ void registerAll() {
             ->UseRealTime()
             ->MinTime(kMinTime);
 
+  // The sweep: the intermediate map as large as the diffuse one.
   for (int face : {8, 16, 32})
     for (int taps : {4, 8, 16})
-      benchmark::RegisterBenchmark(("diffuse_blur/half/face:" + std::to_string(face) + "/half_taps:" +
-                                    std::to_string(taps))
-                                       .c_str(),
-                                   [=](benchmark::State& state) { diffuseBlur(state, false, face, taps); })
+      benchmark::RegisterBenchmark(diffuseName(false, face, face, taps, false).c_str(),
+                                   [=](benchmark::State& state) { diffuseBlur(state, false, face, face, taps); })
           ->Unit(kMillisecond)
           ->UseRealTime()
           ->MinTime(kMinTime);
-  // The 8-bit path at the app's defaults.
-  benchmark::RegisterBenchmark("diffuse_blur/8bit/face:32/half_taps:8",
-                               [](benchmark::State& state) { diffuseBlur(state, true, 32, 8); })
+  // The 8-bit path at 32²/8 half-taps (kept for comparison with earlier runs).
+  benchmark::RegisterBenchmark(diffuseName(true, 32, 32, 8, false).c_str(),
+                               [](benchmark::State& state) { diffuseBlur(state, true, 32, 32, 8); })
       ->Unit(kMillisecond)
       ->UseRealTime()
       ->MinTime(kMinTime);
+  // The app's own default (passes::EnvironmentMapSettings: intermediate 32,
+  // diffuse 16, 16 half-taps), half float and 8-bit.
+  {
+    const passes::EnvironmentMapSettings defaults;
+    const int intermediate = defaults.intermediate_face_size, face = defaults.diffuse_face_size,
+              taps = defaults.blur_half_taps;
+    for (bool eight_bit : {false, true})
+      benchmark::RegisterBenchmark(diffuseName(eight_bit, intermediate, face, taps, false).c_str(),
+                                   [=](benchmark::State& state) {
+                                     diffuseBlur(state, eight_bit, intermediate, face, taps);
+                                   })
+          ->Unit(kMillisecond)
+          ->UseRealTime()
+          ->MinTime(kMinTime);
+  }
 
   for (bool eight_bit : {false, true})
-    benchmark::RegisterBenchmark((std::string("diffuse_sh9/") + (eight_bit ? "8bit" : "half") + "/face:16").c_str(),
-                                 [=](benchmark::State& state) { diffuseBlur(state, eight_bit, 16, 0, true); })
+    benchmark::RegisterBenchmark(diffuseName(eight_bit, 16, 16, 0, true).c_str(),
+                                 [=](benchmark::State& state) { diffuseBlur(state, eight_bit, 16, 16, 0, true); })
         ->Unit(kMillisecond)
         ->UseRealTime()
         ->MinTime(kMinTime);

@@ -10,6 +10,8 @@ packages=(
   libapriltag-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev
   # maths and data
   libglm-dev nlohmann-json3-dev
+  # the command line's parser (header-only)
+  libcli11-dev
   # GLES2 through EGL; Mesa's llvmpipe renders headless on machines without a GPU
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
   # board backends (camera, KMS display, GPIO button, the systemd service's notifications)

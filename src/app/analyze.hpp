@@ -19,11 +19,12 @@
 #include <opencv2/core.hpp>
 
 #include "app/command_line.hpp"
+#include "app/exit_status.hpp"
+#include "core/status.hpp"
 #include "ibl/cube_map.hpp"
 
 namespace probelight {
 
-inline constexpr int kAnalyzeNotFoundExitStatus = 3;
 
 // The normals of analysis.json's "irradiance", unit, in W, in this order:
 // +X, -X, +Y, -Y, +Z, -Z, then the 8 diagonals (sx, sy, sz)/sqrt(3) with
@@ -60,11 +61,14 @@ cv::Mat renderCubeCross(const ibl::CubeMapRGB& map, const CrossPictureOptions& o
 // empty). 1 / clip_level when every texel is clipped or the map is black.
 double crossDisplayScale(const ibl::CubeMapRGB& map, const std::vector<float>& validity, double clip_level);
 
-int runAnalyze(const AnalyzeOptions& options, std::ostream& log);
+// A failure comes back as a Status (kNotFound: the tag or the ball was not
+// found; analysis.json still says what was); main() turns it into the exit
+// status.
+Status runAnalyze(const AnalyzeOptions& options, std::ostream& log);
 
 // `probelight render`: analyze, then the object composited into the frame
 // with its shadow on the ground (DIR/composite.png, the frame's size); the
 // same exit statuses.
-int runRender(const RenderOptions& options, std::ostream& log);
+Status runRender(const RenderOptions& options, std::ostream& log);
 
 }  // namespace probelight

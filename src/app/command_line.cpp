@@ -1,7 +1,10 @@
 #include "app/command_line.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <charconv>
 #include <cmath>
+#include <deque>
 #include <functional>
 #include <map>
 #include <optional>
@@ -9,6 +12,9 @@
 namespace probelight {
 
 namespace {
+
+// The values: every flag's value is a string to CLI11; these turn it into
+// the option's type, with a message that names the flag.
 
 long long parseInteger(const std::string& flag, const std::string& text, long long min_value) {
   long long value = 0;
@@ -29,74 +35,6 @@ void requireChoice(const std::string& flag, const std::string& value, const std:
   for (const auto& choice : choices) list += (list.empty() ? "" : ", ") + choice;
   throw UsageError("flag " + flag + ": unknown value '" + value + "' (choose " + list + ")");
 }
-
-using FlagSetter = std::function<void(const std::string& flag, const std::string& value)>;
-
-// Walks `--flag value` and `--flag=value` pairs, calling the flag's setter.
-// `switches` are flags without a value. `command` prefixes the unknown-flag
-// message ("analyze: ..."), empty for run.
-void parseFlags(const std::vector<std::string>& args, const std::map<std::string, FlagSetter>& valued,
-                const std::map<std::string, std::function<void()>>& switches, const std::string& command) {
-  for (size_t i = 0; i < args.size(); ++i) {
-    std::string flag = args[i];
-    std::optional<std::string> inline_value;
-    if (auto eq = flag.find('='); flag.rfind("--", 0) == 0 && eq != std::string::npos) {
-      inline_value = flag.substr(eq + 1);
-      flag = flag.substr(0, eq);
-    }
-    if (auto on = switches.find(flag); on != switches.end() && !inline_value) {
-      on->second();
-      continue;
-    }
-    auto it = valued.find(flag);
-    if (it == valued.end())
-      throw UsageError((command.empty() ? "" : command + ": ") + "unknown flag '" + flag + "' (see probelight --help)");
-    std::string value;
-    if (inline_value) {
-      value = *inline_value;
-    } else {
-      if (i + 1 >= args.size()) throw UsageError("flag " + flag + " needs a value");
-      value = args[++i];
-    }
-    if (value.empty()) throw UsageError("flag " + flag + " needs a value");
-    it->second(flag, value);
-  }
-}
-
-}  // namespace
-
-RunOptions parseRunOptions(const std::vector<std::string>& args) {
-  RunOptions options;
-  const std::map<std::string, FlagSetter> valued = {
-      {"--source", [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images", "libcamera"}); options.source = v; }},
-      {"--images", [&](auto&, auto& v) { options.images = v; }},
-      {"--display", [&](auto& f, auto& v) { requireChoice(f, v, {"headless", "kms"}); options.display = v; }},
-      {"--button", [&](auto& f, auto& v) { requireChoice(f, v, {"none", "key", "gpio"}); options.button = v; }},
-      {"--key-input", [&](auto&, auto& v) { options.key_path = v; }},
-      {"--frames", [&](auto& f, auto& v) { options.frames = parseInteger(f, v, 0); }},
-      {"--out", [&](auto&, auto& v) { options.out_dir = v; }},
-      {"--config", [&](auto&, auto& v) { options.config_path = v; }},
-      {"--camera", [&](auto&, auto& v) { options.camera_path = v; }},
-      {"--rig", [&](auto&, auto& v) { options.rig_path = v; }},
-      {"--env", [&](auto&, auto& v) { options.sim_env = v; }},
-      {"--path", [&](auto&, auto& v) { options.sim_path = v; }},
-      {"--save-every", [&](auto& f, auto& v) { options.save_every = static_cast<int>(parseInteger(f, v, 0)); }},
-  };
-  parseFlags(args, valued, {{"--quiet", [&] { options.quiet = true; }}}, "");
-  if (options.source == "images" && options.images.empty())
-    throw UsageError("flag --source images needs --images FOLDER_OR_GLOB");
-  if (options.source == "images" && options.camera_path.empty())
-    throw UsageError("flag --source images needs --camera camera.yaml (the calibration of the camera that took them)");
-  if (options.source == "images" && options.rig_path.empty())
-    throw UsageError("flag --source images needs --rig rig.yaml");
-  if (options.source == "libcamera" && options.camera_path.empty())
-    throw UsageError("flag --source libcamera needs --camera camera.yaml (its calibration, at the size to stream)");
-  if (options.source == "libcamera" && options.rig_path.empty())
-    throw UsageError("flag --source libcamera needs --rig rig.yaml");
-  return options;
-}
-
-namespace {
 
 // Comma-separated finite numbers, exactly `count` of them (or 1 when
 // `one_for_all`: the same value for every component).
@@ -120,10 +58,6 @@ std::vector<double> parseNumberList(const std::string& flag, const std::string& 
   return values;
 }
 
-}  // namespace
-
-namespace {
-
 // FILE@EV, the EV after the last '@' (a file name may hold one too).
 BracketOption parseBracket(const std::string& flag, const std::string& text) {
   const std::size_t at = text.rfind('@');
@@ -137,84 +71,6 @@ BracketOption parseBracket(const std::string& flag, const std::string& text) {
     throw UsageError("flag " + flag + ": EV must be non-zero and within +-24 stops, got '" + text + "'");
   return bracket;
 }
-
-}  // namespace
-
-AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
-  AnalyzeOptions options;
-  auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
-  parseFlags(args,
-             {{"--frame", into(options.frame_path)},
-              {"--camera", into(options.camera_path)},
-              {"--rig", into(options.rig_path)},
-              {"--out", into(options.out_dir)},
-              {"--config", into(options.config_path)},
-              {"--bracket", [&](auto& f, auto& v) { options.brackets.push_back(parseBracket(f, v)); }}},
-             {{"--no-white-ref", [&] { options.white_reference = false; }},
-              {"--no-post-ref", [&] { options.post_reference = false; }}},
-             "analyze");
-  // No defaults for these: analysing a frame with some other camera's
-  // calibration, or writing over someone's folder, gives plausible nonsense.
-  if (options.frame_path.empty()) throw UsageError("analyze needs --frame FILE (the camera frame to analyse)");
-  if (options.camera_path.empty()) throw UsageError("analyze needs --camera camera.yaml (the calibration of the camera that took it)");
-  if (options.rig_path.empty()) throw UsageError("analyze needs --rig rig.yaml");
-  if (options.out_dir.empty()) throw UsageError("analyze needs --out DIR (where analysis.json and the pictures go)");
-  return options;
-}
-
-
-RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
-  RenderOptions options;
-  auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
-  bool have_size = false;
-  parseFlags(args,
-             {{"--frame", into(options.frame.frame_path)},
-              {"--camera", into(options.frame.camera_path)},
-              {"--rig", into(options.frame.rig_path)},
-              {"--out", into(options.frame.out_dir)},
-              {"--config", into(options.frame.config_path)},
-              {"--bracket", [&](auto& f, auto& v) { options.frame.brackets.push_back(parseBracket(f, v)); }},
-              {"--object", [&](auto& f, auto& v) { requireChoice(f, v, {"sphere", "box"}); options.object = v; }},
-              {"--radius",
-               [&](auto& f, auto& v) {
-                 options.radius_m = parseNumberList(f, v, 1, false, "a radius in metres, e.g. 0.03")[0];
-                 if (!(options.radius_m > 0.0)) throw UsageError("flag " + f + ": the radius must be > 0, got '" + v + "'");
-               }},
-              {"--size",
-               [&](auto& f, auto& v) {
-                 const auto s = parseNumberList(f, v, 3, false, "the box's edges X,Y,Z in metres, e.g. 0.05,0.04,0.06");
-                 if (!(s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0))
-                   throw UsageError("flag " + f + ": every edge must be > 0, got '" + v + "'");
-                 options.box_size_m = {s[0], s[1], s[2]};
-                 have_size = true;
-               }},
-              {"--yaw", [&](auto& f, auto& v) { options.yaw_deg = parseNumberList(f, v, 1, false, "degrees")[0]; }},
-              {"--at",
-               [&](auto& f, auto& v) {
-                 const auto p = parseNumberList(f, v, 2, false, "X,Y in metres on the ground of the tag's frame");
-                 options.at_w = {p[0], p[1]};
-               }},
-              {"--albedo",
-               [&](auto& f, auto& v) {
-                 const auto a = parseNumberList(f, v, 3, true, "A or R,G,B in [0, 1]");
-                 for (double c : a)
-                   if (c < 0.0 || c > 1.0) throw UsageError("flag " + f + ": albedo must be in [0, 1], got '" + v + "'");
-                 options.albedo = {a[0], a[1], a[2]};
-               }}},
-             {{"--no-white-ref", [&] { options.frame.white_reference = false; }},
-              {"--no-post-ref", [&] { options.frame.post_reference = false; }}},
-             "render");
-  if (options.frame.frame_path.empty()) throw UsageError("render needs --frame FILE (the camera frame)");
-  if (options.frame.camera_path.empty()) throw UsageError("render needs --camera camera.yaml (the calibration of the camera that took it)");
-  if (options.frame.rig_path.empty()) throw UsageError("render needs --rig rig.yaml");
-  if (options.frame.out_dir.empty()) throw UsageError("render needs --out DIR (where composite.png and analysis.json go)");
-  if (options.object == "sphere" && options.radius_m == 0.0) throw UsageError("render needs --radius METRES for a sphere");
-  if (options.object == "box" && !have_size) throw UsageError("render needs --size X,Y,Z (metres) for a box");
-  if (options.object == "sphere" && have_size) throw UsageError("flag --size: only for --object box");
-  return options;
-}
-
-namespace {
 
 // --board COLSxROWS, inner corners. OpenCV's detector needs at least 3 each
 // way (it throws below that), so 1x1 or 2x5 is refused here with the flag's name.
@@ -244,16 +100,277 @@ double parseSquare(const std::string& flag, const std::string& text) {
   return value;
 }
 
+// The commands: their one-line summary (the overview and the top of their
+// --help) and the exit statuses their --help ends with.
+struct Command {
+  std::string name;
+  std::string summary;
+  std::string exit_status;
+};
+
+const Command kRun{"run", "run the kiosk: frames in, composited frames out",
+                   "exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration"};
+const Command kAnalyze{"analyze",
+                       "one frame in: DIR/analysis.json (tag, pose, ball, irradiance, timings) and pictures\n"
+                       "(overlay.png, ball.png, reflection_cross.png, diffuse_cross.png)",
+                       "exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration,\n"
+                       "             3 the tag or the ball was not found: analysis.json says why"};
+const Command kRender{"render",
+                      "a virtual object put into one frame, lit by what its ball shows and casting its shadow\n"
+                      "on the real ground: DIR/composite.png and analysis.json",
+                      kAnalyze.exit_status};
+const Command kCalibrateCamera{"calibrate-camera",
+                               "chessboard views in, camera.yaml out; prints the RMS and per-view reprojection\n"
+                               "errors and why each rejected view was rejected",
+                               "exit status: 0 ok, 1 runtime failure,\n"
+                               "             2 bad flags, no matching files or too few usable views"};
+
+using FlagSetter = std::function<void(const std::string& flag, const std::string& value)>;
+
+// A flag with a value. The setter gets the flag's long name (for messages)
+// and each value given, in the order given: a repeated flag's last value
+// wins, and every value is checked.
+struct ValuedFlag {
+  std::string names;        // "--frames", or with a short name "-n,--frames"
+  std::string value_name;   // the value in the help: "N", "camera.yaml"
+  std::string description;  // one line, defaults and choices included
+  FlagSetter set;
+  bool repeatable = false;  // --bracket: each value adds one (the help says so)
+};
+
+// A flag without a value.
+struct Switch {
+  std::string names;
+  std::string description;
+  std::function<void()> set;
+};
+
+std::string longName(const std::string& names) {
+  const std::size_t at = names.find("--");
+  return at == std::string::npos ? names : names.substr(at, names.find(',', at) - at);
+}
+
+std::string oneLine(std::string text) {
+  for (char& c : text)
+    if (c == '\n') c = ' ';
+  return text;
+}
+
+// CLI11 gives the structure (--flag value, --flag=value, short names, -h and
+// --help with its text); the setters convert, with messages naming the flag.
+// Any usage error is one UsageError line, "<command>: ..." or "flag --X ...";
+// -h or --help throws HelpRequested with the command's help.
+void parseFlags(const std::vector<std::string>& args, const Command& command, const std::vector<ValuedFlag>& valued,
+                const std::vector<Switch>& switches) {
+  CLI::App app("probelight " + command.name + ": " + command.summary + "\n", "probelight " + command.name);
+  app.option_defaults()->group("flags");
+  app.set_help_flag("-h,--help", "print this help and exit");
+  app.allow_extras();  // an unknown flag: our message below, not CLI11's
+  app.footer(command.exit_status);
+  app.get_formatter()->column_width(33);
+  app.get_formatter()->label("OPTIONS", "flags");
+  app.get_formatter()->label("Usage", "usage");
+  std::vector<CLI::Option*> valued_options;
+  for (const ValuedFlag& flag : valued)
+    valued_options.push_back(
+        app.add_option(flag.names, CLI::callback_t{}, flag.description + (flag.repeatable ? "; repeatable" : ""))
+            ->option_text(flag.value_name)
+            ->allow_extra_args(false)  // one value per flag: `--bracket a@-1 b@-2` is not two brackets
+            ->multi_option_policy(flag.repeatable ? CLI::MultiOptionPolicy::TakeAll : CLI::MultiOptionPolicy::TakeLast));
+  std::vector<CLI::Option*> switch_options;
+  for (const Switch& flag : switches) switch_options.push_back(app.add_flag(flag.names, flag.description));
+
+  const std::string prefix = command.name + ": ";
+  const std::string see_help = " (see probelight " + command.name + " --help)";
+  // `--flag=` would make CLI11 take the next argument as the value, and
+  // `--quiet=no` would set --quiet: both are errors here.
+  for (const std::string& arg : args) {
+    if (arg == "--") break;
+    const std::size_t eq = arg.find('=');
+    if (arg.rfind("--", 0) != 0 || eq == std::string::npos) continue;
+    const std::string name = arg.substr(0, eq);
+    for (const ValuedFlag& flag : valued)
+      if (longName(flag.names) == name && eq + 1 == arg.size()) throw UsageError("flag " + name + " needs a value");
+    for (const Switch& flag : switches)
+      if (longName(flag.names) == name) throw UsageError("flag " + name + " takes no value" + see_help);
+  }
+
+  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first
+  try {
+    app.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    throw HelpRequested{app.help()};
+  } catch (const CLI::ArgumentMismatch& error) {
+    // The one CLI11 raises here: the last flag has no value left
+    // ("--frames: 1 required  missing").
+    const std::string what = error.what();
+    const std::string name = what.substr(0, what.find(':'));
+    for (const ValuedFlag& flag : valued)
+      if (longName(flag.names) == name) throw UsageError("flag " + name + " needs a value");
+    throw UsageError(prefix + oneLine(what) + see_help);
+  } catch (const CLI::ParseError& error) {
+    throw UsageError(prefix + oneLine(error.what()) + see_help);
+  }
+  if (const std::vector<std::string> extras = app.remaining(); !extras.empty()) {
+    const std::string& extra = extras.front();
+    if (extra.size() > 1 && extra[0] == '-')
+      throw UsageError(prefix + "unknown flag '" + extra.substr(0, extra.find('=')) + "'" + see_help);
+    throw UsageError(prefix + "unexpected argument '" + extra + "' (flags take one value each)" + see_help);
+  }
+  for (std::size_t i = 0; i < valued.size(); ++i) {
+    const std::string name = longName(valued[i].names);
+    for (const std::string& value : valued_options[i]->results()) {
+      if (value.empty()) throw UsageError("flag " + name + " needs a value");
+      valued[i].set(name, value);
+    }
+  }
+  for (std::size_t i = 0; i < switches.size(); ++i)
+    if (switch_options[i]->count() > 0) switches[i].set();
+}
+
 }  // namespace
+
+RunOptions parseRunOptions(const std::vector<std::string>& args) {
+  RunOptions options;
+  auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
+  parseFlags(
+      args, kRun,
+      {{"--source", "sim|images|libcamera",
+        "frame source (default sim: the simulated world; images: files; libcamera: the camera)",
+        [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images", "libcamera"}); options.source = v; }},
+       {"--images", "FOLDER_OR_GLOB", "files to replay with --source images", into(options.images)},
+       {"--camera", "camera.yaml", "camera calibration (sim: overrides the simulated camera)", into(options.camera_path)},
+       {"--rig", "rig.yaml", "tag and mirror-ball geometry (sim: overrides the simulated rig)", into(options.rig_path)},
+       {"-c,--config", "probelight.yaml", "pipeline settings (see board/probelight.yaml)", into(options.config_path)},
+       {"--display", "headless|kms",
+        "headless (default: Mesa's EGL, frames written as PNG) or kms (fullscreen on the board's screen)",
+        [&](auto& f, auto& v) { requireChoice(f, v, {"headless", "kms"}); options.display = v; }},
+       {"--button", "none|key|gpio",
+        "recalibration button (default none; key: lines on stdin or a FIFO; gpio: the board's button)",
+        [&](auto& f, auto& v) { requireChoice(f, v, {"none", "key", "gpio"}); options.button = v; }},
+       {"--key-input", "PATH", "where --button key reads ('-' = stdin, default)", into(options.key_path)},
+       {"-n,--frames", "N", "frames to process, 0 = until the source ends (default 300)",
+        [&](auto& f, auto& v) { options.frames = parseInteger(f, v, 0); }},
+       {"--save-every", "K", "write every K-th composited frame as PNG, 0 = none (default 1)",
+        [&](auto& f, auto& v) { options.save_every = static_cast<int>(parseInteger(f, v, 0)); }},
+       {"-o,--out", "DIR", "output folder for frames and report.json (default out)", into(options.out_dir)},
+       {"--capture", "DIR",
+        "at the end, keep the last camera frame (frame.png) with its camera.yaml and rig.yaml in DIR, "
+        "as analyze and render take them",
+        into(options.capture_dir)},
+       {"--env", "NAME|FILE", "sim: studio, sun_sky, overcast, coloured_wall, uniform, or an .exr/.hdr file",
+        into(options.sim_env)},
+       {"--path", "NAME", "sim: camera path: static, orbit, slow_wobble, random", into(options.sim_path)}},
+      {{"-q,--quiet", "no per-frame status lines", [&] { options.quiet = true; }}});
+  if (options.source == "images" && options.images.empty())
+    throw UsageError("flag --source images needs --images FOLDER_OR_GLOB");
+  if (options.source == "images" && options.camera_path.empty())
+    throw UsageError("flag --source images needs --camera camera.yaml (the calibration of the camera that took them)");
+  if (options.source == "images" && options.rig_path.empty())
+    throw UsageError("flag --source images needs --rig rig.yaml");
+  if (options.source == "libcamera" && options.camera_path.empty())
+    throw UsageError("flag --source libcamera needs --camera camera.yaml (its calibration, at the size to stream)");
+  if (options.source == "libcamera" && options.rig_path.empty())
+    throw UsageError("flag --source libcamera needs --rig rig.yaml");
+  return options;
+}
+
+namespace {
+
+// analyze's flags, render's too: the frame, its calibration, the rig, where
+// the results go, and how the light is read.
+std::vector<ValuedFlag> frameFlags(AnalyzeOptions& options, const std::string& out_description) {
+  auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
+  return {{"-f,--frame", "FILE", "the camera frame: PNG, JPEG, ... (required)", into(options.frame_path)},
+          {"--camera", "camera.yaml", "the calibration of the camera that took it (required)", into(options.camera_path)},
+          {"--rig", "rig.yaml", "tag and mirror-ball geometry (required)", into(options.rig_path)},
+          {"-o,--out", "DIR", out_description + " (required)", into(options.out_dir)},
+          {"-c,--config", "probelight.yaml", "pipeline settings (optional, see board/probelight.yaml)",
+           into(options.config_path)},
+          {"--bracket", "FILE@EV",
+           "the same view EV stops from --frame's exposure, e.g. under3.png@-3, merged into HDR light",
+           [&options](auto& f, auto& v) { options.brackets.push_back(parseBracket(f, v)); }, true}};
+}
+
+std::vector<Switch> lightSwitches(AnalyzeOptions& options) {
+  return {{"--no-white-ref", "without a bracket, do not use the tag's white border to restore clipped light",
+           [&options] { options.white_reference = false; }},
+          {"--no-post-ref", "nor the ball's post (rig.yaml post_radius, post_albedo) to divide that light",
+           [&options] { options.post_reference = false; }}};
+}
+
+}  // namespace
+
+AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
+  AnalyzeOptions options;
+  parseFlags(args, kAnalyze, frameFlags(options, "where analysis.json and the pictures go"), lightSwitches(options));
+  // No defaults for these: analysing a frame with some other camera's
+  // calibration, or writing over someone's folder, gives plausible nonsense.
+  if (options.frame_path.empty()) throw UsageError("analyze needs --frame FILE (the camera frame to analyse)");
+  if (options.camera_path.empty()) throw UsageError("analyze needs --camera camera.yaml (the calibration of the camera that took it)");
+  if (options.rig_path.empty()) throw UsageError("analyze needs --rig rig.yaml");
+  if (options.out_dir.empty()) throw UsageError("analyze needs --out DIR (where analysis.json and the pictures go)");
+  return options;
+}
+
+RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
+  RenderOptions options;
+  bool have_size = false;
+  std::vector<ValuedFlag> valued = frameFlags(options.frame, "where composite.png and analysis.json go");
+  const std::vector<ValuedFlag> object_flags = {
+      {"--object", "sphere|box", "the virtual object (default sphere)",
+       [&](auto& f, auto& v) { requireChoice(f, v, {"sphere", "box"}); options.object = v; }},
+      {"--radius", "METRES", "sphere: its radius (required for a sphere)",
+       [&](auto& f, auto& v) {
+         options.radius_m = parseNumberList(f, v, 1, false, "a radius in metres, e.g. 0.03")[0];
+         if (!(options.radius_m > 0.0)) throw UsageError("flag " + f + ": the radius must be > 0, got '" + v + "'");
+       }},
+      {"--size", "X,Y,Z", "box: its edges in metres (required for a box)",
+       [&](auto& f, auto& v) {
+         const auto s = parseNumberList(f, v, 3, false, "the box's edges X,Y,Z in metres, e.g. 0.05,0.04,0.06");
+         if (!(s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0))
+           throw UsageError("flag " + f + ": every edge must be > 0, got '" + v + "'");
+         options.box_size_m = {s[0], s[1], s[2]};
+         have_size = true;
+       }},
+      {"--yaw", "DEG", "box: turned about the tag's +Z (default 0)",
+       [&](auto& f, auto& v) { options.yaw_deg = parseNumberList(f, v, 1, false, "degrees")[0]; }},
+      {"--at", "X,Y", "where it stands, metres on the ground of the tag's frame (default 0,0)",
+       [&](auto& f, auto& v) {
+         const auto p = parseNumberList(f, v, 2, false, "X,Y in metres on the ground of the tag's frame");
+         options.at_w = {p[0], p[1]};
+       }},
+      {"--albedo", "A|R,G,B", "its colour, each in [0, 1] (default 0.8)",
+       [&](auto& f, auto& v) {
+         const auto a = parseNumberList(f, v, 3, true, "A or R,G,B in [0, 1]");
+         for (double c : a)
+           if (c < 0.0 || c > 1.0) throw UsageError("flag " + f + ": albedo must be in [0, 1], got '" + v + "'");
+         options.albedo = {a[0], a[1], a[2]};
+       }}};
+  valued.insert(valued.end(), object_flags.begin(), object_flags.end());
+  parseFlags(args, kRender, valued, lightSwitches(options.frame));
+  if (options.frame.frame_path.empty()) throw UsageError("render needs --frame FILE (the camera frame)");
+  if (options.frame.camera_path.empty()) throw UsageError("render needs --camera camera.yaml (the calibration of the camera that took it)");
+  if (options.frame.rig_path.empty()) throw UsageError("render needs --rig rig.yaml");
+  if (options.frame.out_dir.empty()) throw UsageError("render needs --out DIR (where composite.png and analysis.json go)");
+  if (options.object == "sphere" && options.radius_m == 0.0) throw UsageError("render needs --radius METRES for a sphere");
+  if (options.object == "box" && !have_size) throw UsageError("render needs --size X,Y,Z (metres) for a box");
+  if (options.object == "sphere" && have_size) throw UsageError("flag --size: only for --object box");
+  return options;
+}
 
 CalibrateCameraOptions parseCalibrateCameraOptions(const std::vector<std::string>& args) {
   CalibrateCameraOptions options;
-  parseFlags(args,
-             {{"--images", [&](auto&, auto& v) { options.images = v; }},
-              {"--board", [&](auto& f, auto& v) { parseBoard(f, v, options.board_cols, options.board_rows); }},
-              {"--square", [&](auto& f, auto& v) { options.square_m = parseSquare(f, v); }},
-              {"--out", [&](auto&, auto& v) { options.out_path = v; }}},
-             {}, "calibrate-camera");
+  parseFlags(args, kCalibrateCamera,
+             {{"--images", "GLOB", "the views, e.g. 'captures/board_*.png' (quoted) (required)",
+               [&](auto&, auto& v) { options.images = v; }},
+              {"--board", "COLSxROWS", "inner corners of the chessboard, e.g. 9x6 (required)",
+               [&](auto& f, auto& v) { parseBoard(f, v, options.board_cols, options.board_rows); }},
+              {"--square", "METRES", "edge of one square, e.g. 0.025 (required)",
+               [&](auto& f, auto& v) { options.square_m = parseSquare(f, v); }},
+              {"-o,--out", "camera.yaml", "where the calibration goes (required)",
+               [&](auto&, auto& v) { options.out_path = v; }}},
+             {});
   if (options.images.empty()) throw UsageError("calibrate-camera needs --images GLOB (the chessboard views)");
   if (options.board_cols == 0) throw UsageError("calibrate-camera needs --board COLSxROWS (inner corners, e.g. 9x6)");
   if (options.square_m == 0.0) throw UsageError("calibrate-camera needs --square METRES (a square's edge, e.g. 0.025)");
@@ -262,55 +379,28 @@ CalibrateCameraOptions parseCalibrateCameraOptions(const std::vector<std::string
 }
 
 std::string usageText() {
-  return R"(probelight: image-based lighting for an AR kiosk (mirror ball + AprilTag)
-
-usage:
-  probelight run [flags]       run the kiosk: frames in, composited frames out
-  probelight analyze --frame F --camera camera.yaml --rig rig.yaml --out DIR [--config probelight.yaml]
-                               one frame in: DIR/analysis.json (tag, pose, ball, irradiance, timings)
-                               and pictures (overlay.png, ball.png, reflection_cross.png, diffuse_cross.png)
-      [--bracket FILE@EV]...   the same view EV stops shorter (e.g. under3.png@-3), merged into HDR light
-      [--no-white-ref]         without a bracket, do not use the tag's white border to restore clipped light
-      [--no-post-ref]          nor the ball's post (rig.yaml post_radius, post_albedo) to divide that light
-  probelight render --frame F --camera camera.yaml --rig rig.yaml --out DIR --object sphere --radius R
-                    [--at X,Y] [--albedo A|R,G,B] [--config probelight.yaml]
-  probelight render ... --object box --size X,Y,Z [--yaw DEG]   (and analyze's --bracket, --no-white-ref, --no-post-ref)
-                               a virtual object put into one frame, lit by what its ball shows and
-                               casting its shadow on the real ground: DIR/composite.png and analysis.json
-  probelight calibrate-camera --images GLOB --board COLSxROWS --square METRES --out camera.yaml
-                               chessboard views in, camera.yaml out; prints the RMS and per-view
-                               reprojection errors and why each rejected view was rejected
-  probelight --help | --version
-
-run flags:
-  --source sim|images|libcamera
-                               frame source (default sim: the simulated world; libcamera: the camera)
-  --images FOLDER_OR_GLOB      files to replay with --source images
-  --camera camera.yaml         camera calibration (sim: overrides the simulated camera)
-  --rig rig.yaml               tag and mirror-ball geometry (sim: overrides the simulated rig)
-  --config probelight.yaml     pipeline settings (see board/probelight.yaml)
-  --display headless|kms       headless EGL on Mesa, frames written as PNG; or fullscreen on the
-                               board's screen through DRM/KMS (probelight.yaml's display section)
-  --button none|key|gpio       recalibration button (key: lines on stdin or a FIFO; gpio: the board's
-                               button, probelight.yaml's button section)
-  --key-input PATH             where --button key reads ('-' = stdin, default)
-  --frames N                   frames to process, 0 = until the source ends (default 300)
-  --save-every K               write every K-th composited frame as PNG, 0 = none (default 1)
-  --out DIR                    output folder for frames and report.json (default out)
-  --env NAME|FILE              sim: studio, sun_sky, overcast, coloured_wall, uniform, or an .exr/.hdr file
-  --path NAME                  sim: camera path: static, orbit, slow_wobble, random
-  --quiet                      no per-frame status lines
-
-calibrate-camera flags:
-  --images GLOB                the views, e.g. 'captures/board_*.png' (quoted)
-  --board COLSxROWS            inner corners of the chessboard, e.g. 9x6
-  --square METRES              edge of one square, e.g. 0.025
-  --out camera.yaml            where the calibration goes
+  std::string text = "probelight: image-based lighting for an AR kiosk (mirror ball + AprilTag)\n\n"
+                     "usage: probelight COMMAND [flags]\n\n"
+                     "commands:\n";
+  auto line = [&](const std::string& name, const std::string& summary) {
+    std::string padded = "  " + name;
+    padded.resize(std::max<std::size_t>(padded.size() + 2, 22), ' ');
+    text += padded + summary.substr(0, summary.find('\n')) + "\n";
+  };
+  line(kRun.name, kRun.summary);
+  line(kAnalyze.name, "one frame in: what the system sees (DIR/analysis.json and pictures)");
+  line(kRender.name, "a virtual object put into one frame, lit and shadowed (DIR/composite.png)");
+  line(kCalibrateCamera.name, "chessboard views in, camera.yaml out");
+  line("help, -h, --help", "this overview");
+  line("--version", "the version");
+  text += R"(
+probelight COMMAND --help (or -h) lists that command's flags.
 
 exit status: 0 ok, 1 runtime failure, 2 bad flags or configuration
              (calibrate-camera: also no matching files or too few usable views),
              3 (analyze, render) the tag or the ball was not found: analysis.json says why.
 )";
+  return text;
 }
 
 }  // namespace probelight

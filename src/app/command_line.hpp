@@ -1,5 +1,6 @@
-// Command-line parsing for `probelight <command> [flags]`. A bad flag is a
-// UsageError: one line naming the flag, and exit status 2.
+// Command-line parsing for `probelight <command> [flags]` (with CLI11). A bad
+// flag is a UsageError: one line naming the flag, and exit status 2. -h or
+// --help after a command is HelpRequested: its flags, printed, exit status 0.
 #pragma once
 
 #include <map>
@@ -14,6 +15,13 @@ namespace probelight {
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
+};
+
+// Thrown by the parse functions for -h or --help: `text` is the command's
+// help (what it does, each flag on one line, its exit statuses). Not an
+// std::exception, so no catch-all reports it as an error.
+struct HelpRequested {
+  std::string text;
 };
 
 // Flags of `probelight run`. Empty strings mean "not given".
@@ -31,10 +39,13 @@ struct RunOptions {
   std::string sim_env;                // overrides sim.env
   std::string sim_path;               // overrides sim.camera_path
   std::optional<int> save_every;      // overrides output.save_every
+  std::string capture_dir;            // --capture: the last camera frame, camera.yaml and rig.yaml go here
   bool quiet = false;
 };
 
-// Parses the flags after `probelight run`. Throws UsageError.
+// Parses the flags after `probelight run`. Throws UsageError or
+// HelpRequested, as do the other parse functions. A flag given twice: the
+// last value wins (both are checked).
 RunOptions parseRunOptions(const std::vector<std::string>& args);
 
 // Flags of `probelight analyze`: one frame in, what the system sees out.
@@ -92,6 +103,8 @@ struct CalibrateCameraOptions {
 // Parses the flags after `probelight calibrate-camera`. Throws UsageError.
 CalibrateCameraOptions parseCalibrateCameraOptions(const std::vector<std::string>& args);
 
+// The overview for `probelight`, `probelight --help`: the commands, one line
+// each, and the exit statuses.
 std::string usageText();
 
 }  // namespace probelight

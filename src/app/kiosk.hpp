@@ -1,14 +1,15 @@
 // `probelight run`: frames in, composited frames out, lighting recalibrated on
-// demand. Returns the process exit status (0 ok, 1 runtime failure, 2 bad
-// flags or configuration).
+// demand. A failure comes back as a Status (a runtime failure, or bad flags,
+// files or configuration); main() turns it into the exit status.
 #pragma once
 
 #include <iosfwd>
 
 #include "app/command_line.hpp"
+#include "core/status.hpp"
 
 namespace probelight {
 
-int runKiosk(const RunOptions& options, std::ostream& log);
+Status runKiosk(const RunOptions& options, std::ostream& log);
 
 }  // namespace probelight

@@ -9,6 +9,7 @@
 #include "app/analyze.hpp"
 #include "app/calibrate_camera.hpp"
 #include "app/command_line.hpp"
+#include "app/exit_status.hpp"
 #include "app/kiosk.hpp"
 #include "core/log_priority.hpp"
 
@@ -29,11 +30,14 @@ int main(int argc, char** argv) {
   std::unique_ptr<JournalPrefixes> journal;
   if (stderrIsJournal()) journal = std::make_unique<JournalPrefixes>(std::cerr);
   try {
-    if (command == "run") return runKiosk(parseRunOptions(args), std::cerr);
-    if (command == "analyze") return runAnalyze(parseAnalyzeOptions(args), std::cerr);
-    if (command == "render") return runRender(parseRenderOptions(args), std::cerr);
+    if (command == "run") return finishCommand(runKiosk(parseRunOptions(args), std::cerr), "", std::cerr);
+    if (command == "analyze") return finishCommand(runAnalyze(parseAnalyzeOptions(args), std::cerr), command, std::cerr);
+    if (command == "render") return finishCommand(runRender(parseRenderOptions(args), std::cerr), command, std::cerr);
     if (command == "calibrate-camera") return runCalibrateCamera(parseCalibrateCameraOptions(args), std::cout, std::cerr);
     throw UsageError("unknown command '" + command + "' (see probelight --help)");
+  } catch (const HelpRequested& help) {  // `probelight COMMAND --help` or -h
+    std::cout << help.text;
+    return 0;
   } catch (const UsageError& error) {
     std::cerr << logPrefix(LogPriority::kError) << "probelight: " << error.what() << "\n";
     return 2;

@@ -16,6 +16,21 @@ LumaView FrameBuffer::luma() const {
   return LumaView{luma_storage.data(), width_px, height_px, width_px};
 }
 
+ImageRGB8 FrameBuffer::toRgb() const {
+  if (layout == PixelLayout::kRgb8) return rgb;
+  ImageRGB8 out;
+  out.resize(width_px, height_px);
+  for (int y = 0; y < height_px; ++y)
+    for (int x = 0; x < width_px; ++x) {
+      const glm::u8vec3 p = rgbAt(x, y);
+      std::uint8_t* pixel = out.row(y) + 3 * x;
+      pixel[0] = p.r;
+      pixel[1] = p.g;
+      pixel[2] = p.b;
+    }
+  return out;
+}
+
 glm::u8vec3 FrameBuffer::rgbAt(int x, int y) const {
   if (!isYuv(layout)) {
     const std::uint8_t* p = rgb.row(y) + 3 * x;

@@ -15,6 +15,7 @@
 #include <thread>
 #include <vector>
 
+#include "capture/exposure_control.hpp"
 #include "core/types.hpp"
 #include "core/ycbcr.hpp"
 
@@ -83,6 +84,8 @@ struct FrameBuffer {
   // Y'CbCr for YUV layouts (for the few hundred pixels the CPU reads, such
   // as the tag's white border; the GPU converts whole frames).
   glm::u8vec3 rgbAt(int x, int y) const;
+  // The whole frame as 8-bit R'G'B' (a copy; decoded from Y'CbCr for YUV).
+  ImageRGB8 toRgb() const;
   // Makes this an RGB frame of `rgb`'s size whose luma is computed from it.
   void finishRgb();
   // Makes this a kI420 or kNv12 frame of the given size in `yuv_storage`
@@ -128,9 +131,8 @@ class FrameLease {
 
 enum class FrameWait { kFrame, kTimeout, kEndOfStream, kError };
 
-class FrameSource {
+class FrameSource : public ExposureControl {
  public:
-  virtual ~FrameSource() = default;
   // Starts capture. On failure returns false and sets `error` to one line a
   // user can act on.
   virtual bool start(std::string& error) = 0;
@@ -140,35 +142,8 @@ class FrameSource {
   // Why the stream ended or failed (empty while healthy).
   virtual std::string lastError() const = 0;
   virtual std::string name() const = 0;
-  // Freezes (true) or releases (false) auto exposure and white balance, so
-  // that frames taken for a recalibration see the ball the same way. Returns
-  // false when the source has no such controls.
-  virtual bool lockExposure(bool locked) {
-    (void)locked;
-    return false;
-  }
-  // Fixed exposures (auto exposure off) for the frames that follow, one
-  // frame each, in order, as an exposure bracket needs; the last holds until
-  // the next call. A camera takes controls with each request, so a ladder
-  // asked at once arrives on consecutive frames after the pipeline's latency
-  // (a few frames), paid once. A new call replaces the exposures not yet
-  // begun; an empty one goes back to what lockExposure set. Frames already in
-  // flight keep their exposure: each frame's metadata (exposure_us,
-  // analogue_gain) says what it got, and a sensor may clamp the request.
-  // While a ladder is asked for, waitFrame hands over every frame in order
-  // (not only the newest), so that no rung is lost. Returns false when the
-  // source has no such control.
-  struct ManualExposure {
-    double exposure_us = 0.0;
-    double analogue_gain = 1.0;
-  };
-  virtual bool setExposureLadder(const std::vector<ManualExposure>& per_frame) {
-    (void)per_frame;
-    return false;
-  }
-  // The sensor's shortest exposure time (microseconds), where the source
-  // knows it: a ladder's rungs below it would all be taken at it.
-  virtual std::optional<double> shortestExposureUs() const { return std::nullopt; }
+  // lockExposure, setExposureLadder and shortestExposureUs: ExposureControl's,
+  // false or nothing where the source has no such controls.
 };
 
 // Shared machinery for sources that make frames on a thread of their own:

@@ -1,5 +1,7 @@
 #include "core/types.hpp"
 
+#include <cmath>
+
 namespace probelight {
 
 void lumaFromRgb(const ImageRGB8& rgb, std::vector<std::uint8_t>& luma) {
@@ -15,6 +17,14 @@ void lumaFromRgb(const ImageRGB8& rgb, std::vector<std::uint8_t>& luma) {
   std::uint8_t* out = luma.data();
   for (std::size_t i = 0; i < pixel_count; ++i, in += 3)
     out[i] = static_cast<std::uint8_t>((kR * in[0] + kG * in[1] + kB * in[2] + kHalf) >> 14);
+}
+
+double rotationAngleDeg(const glm::dmat3& a, const glm::dmat3& b) {
+  const glm::dmat3 relative = glm::transpose(a) * b;
+  const double cosine = (relative[0][0] + relative[1][1] + relative[2][2] - 1.0) / 2.0;
+  const glm::dvec3 axis_times_sine(relative[1][2] - relative[2][1], relative[2][0] - relative[0][2],
+                                   relative[0][1] - relative[1][0]);
+  return glm::degrees(std::atan2(glm::length(axis_times_sine) / 2.0, cosine));
 }
 
 }  // namespace probelight

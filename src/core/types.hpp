@@ -57,6 +57,12 @@ struct PoseCamFromWorld {
   glm::dvec3 cameraCenterWorld() const { return -glm::transpose(R_cam_from_world) * t_cam_from_world; }
 };
 
+// The angle of the rotation between orientations a and b (of a * b^T, or
+// a^T * b: the same angle), in degrees. atan2 of the sine and cosine parts
+// keeps precision at small angles, where acos of the trace alone bottoms out
+// near 1e-6 degrees.
+double rotationAngleDeg(const glm::dmat3& a, const glm::dmat3& b);
+
 // An 8-bit plane read in place (the detector's luma).
 struct LumaView {
   const std::uint8_t* data = nullptr;

@@ -30,6 +30,9 @@ class Display {
   virtual std::string name() const = 0;
   // Platform and renderer, for the report.
   virtual std::string describe() const = 0;
+  // Keep the next presented frame whatever else the display keeps (the last
+  // frame of a run, say); a display that keeps no frames ignores it.
+  virtual void keepNextFrame() {}
 };
 
 // EGL without a display server (Mesa surfaceless); each presented frame is
@@ -46,9 +49,8 @@ class HeadlessDisplay final : public Display {
   std::string name() const override { return "headless"; }
   std::string describe() const override;
 
-  // Keep the next presented frame whatever save_every says (the last frame of
-  // a run, say).
-  void keepNextFrame() { keep_next_ = true; }
+  // Whatever save_every says.
+  void keepNextFrame() override { keep_next_ = true; }
   // The last frame read back (empty if none was kept yet).
   const ImageRGB8& lastKeptFrame() const { return last_kept_; }
   const std::filesystem::path& lastKeptPath() const { return last_kept_path_; }

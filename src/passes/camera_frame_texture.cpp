@@ -1,4 +1,5 @@
 #include "passes/camera_frame_texture.hpp"
+#include "passes/framebuffer_state_guard.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -21,24 +22,6 @@ constexpr EGLint fourcc(char a, char b, char c, char d) {
 }
 constexpr EGLint kDrmFormatYuv420 = fourcc('Y', 'U', '1', '2');
 constexpr EGLint kDrmFormatNv12 = fourcc('N', 'V', '1', '2');
-
-// Restores the framebuffer and viewport a pass found: the conversion runs
-// in the middle of other stages' state.
-class SavedTarget {
- public:
-  SavedTarget() {
-    glGetIntegerv(GL_FRAMEBUFFER_BINDING, &framebuffer_);
-    glGetIntegerv(GL_VIEWPORT, viewport_);
-  }
-  ~SavedTarget() {
-    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(framebuffer_));
-    glViewport(viewport_[0], viewport_[1], viewport_[2], viewport_[3]);
-  }
-
- private:
-  GLint framebuffer_ = 0;
-  GLint viewport_[4] = {0, 0, 0, 0};
-};
 
 }  // namespace
 
@@ -161,7 +144,7 @@ bool CameraFrameTexture::ensureRenderableTexture(int width_px, int height_px, st
   auto texture = gles::createTexture2D(width_px, height_px, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, nullptr, error);
   if (!texture) return false;
   gles::Framebuffer framebuffer = gles::Framebuffer::create();
-  SavedTarget saved;
+  FramebufferStateGuard saved;
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer.id());
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture->id(), 0);
   const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
@@ -246,7 +229,7 @@ bool CameraFrameTexture::uploadPlanes(const YuvPlanes& planes, PixelLayout layou
 }
 
 bool CameraFrameTexture::drawIntoTexture(const gles::Program& program, std::string& error) {
-  SavedTarget saved;
+  FramebufferStateGuard saved;
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
   glViewport(0, 0, width_px_, height_px_);
   glDisable(GL_BLEND);

@@ -5,19 +5,6 @@
 
 namespace probelight {
 
-namespace {
-
-// Angle of the rotation taking orientation b to a, in degrees (the trace
-// formula; the same as tracking::rotationDifferenceDeg, kept here so that the
-// policy depends on nothing but glm).
-double rotationChangeDeg(const glm::dmat3& a, const glm::dmat3& b) {
-  const glm::dmat3 difference = a * glm::transpose(b);
-  const double cosine = (difference[0][0] + difference[1][1] + difference[2][2] - 1.0) * 0.5;
-  return std::acos(std::clamp(cosine, -1.0, 1.0)) * 180.0 / M_PI;
-}
-
-}  // namespace
-
 const char* toString(MapSkipReason reason) {
   switch (reason) {
     case MapSkipReason::kNone: return "";
@@ -144,7 +131,7 @@ MapUpdateDecision MapUpdatePolicy::decide(const MapFrameInput& frame) {
   if (previous_) {
     decision.center_shift_px = glm::length(outline.center_px - previous_->center_px);
     decision.radius_change_px = std::abs(outline.radius_px - previous_->radius_px);
-    decision.rotation_change_deg = rotationChangeDeg(frame.rotation_cam_from_world, previous_->rotation);
+    decision.rotation_change_deg = rotationAngleDeg(frame.rotation_cam_from_world, previous_->rotation);
     steady = *decision.center_shift_px <= settings_.max_center_shift_px &&
              *decision.radius_change_px <= settings_.max_radius_change_px &&
              *decision.rotation_change_deg <= settings_.max_rotation_change_deg;

@@ -43,12 +43,6 @@ long long RunReport::counter(const std::string& name) const {
   return it == counters_.end() ? 0 : it->second;
 }
 
-namespace {
-// JSON has no NaN or infinity; a non-finite figure becomes null so that the
-// file stays valid and the gap is visible.
-nlohmann::json finiteOrNull(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
-}  // namespace
-
 nlohmann::json RunReport::toJson(long long frames, double elapsed_s) const {
   nlohmann::json out;
   out["frames"] = frames;
@@ -91,6 +85,12 @@ nlohmann::json RunReport::toJson(long long frames, double elapsed_s) const {
   out["counters"] = counters_;
   for (const auto& [key, value] : extra.items()) out[key] = value;
   return out;
+}
+
+void recordSeries(nlohmann::json& out, const std::string& name, const SampleSeries& series) {
+  if (series.empty()) return;
+  out[name] = {{"median", series.median()}, {"p95", series.percentile(95.0)}, {"max", series.max()},
+               {"samples", series.count()}};
 }
 
 }  // namespace probelight

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
@@ -30,6 +31,8 @@ class SampleSeries {
   // Nearest-rank percentile, p in [0, 100]; 0 when empty.
   double percentile(double p) const;
   double median() const { return percentile(50.0); }
+  // The value added last; 0 when empty.
+  double latest() const { return values_.empty() ? 0.0 : values_[(total_ - 1) % kWindow]; }
   double max() const;
   double mean() const;
 
@@ -37,6 +40,16 @@ class SampleSeries {
   std::vector<double> values_;
   size_t total_ = 0;
 };
+
+// JSON has no NaN or infinity; a non-finite figure becomes null so that the
+// file stays valid and the gap is visible.
+inline nlohmann::json finiteOrNull(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json();
+}
+
+// `series` as {median, p95, max, samples} under `name` in `out`; nothing
+// when it is empty.
+void recordSeries(nlohmann::json& out, const std::string& name, const SampleSeries& series);
 
 class RunReport {
  public:

@@ -50,3 +50,16 @@ passes::GroundShadowSettings groundShadowSettings(const PipelineSettings& settin
 }
 
 }  // namespace probelight
+
+namespace probelight {
+
+ibl::LightingFitSettings lightingFitSettings(const PipelineSettings& settings) {
+  ibl::LightingFitSettings fit;
+  fit.camera_transfer = settings.maps.stages.camera_transfer;
+  fit.white_reference = settings.lights.white_reference;
+  fit.post_reference = settings.lights.post_reference;
+  fit.dome = settings.lights.dome;
+  return fit;
+}
+
+}  // namespace probelight

@@ -6,6 +6,7 @@
 
 #include "stages/pipeline_settings.hpp"
 #include "core/types.hpp"
+#include "ibl/lighting_fit.hpp"
 #include "ibl/surface_shading.hpp"
 #include "passes/environment_maps.hpp"
 #include "passes/ground_shadow.hpp"
@@ -28,5 +29,9 @@ ibl::SurfaceMaterial objectMaterial(const PipelineSettings& settings);
 // The `lights` section's shadow settings, with the camera's transfer (the
 // composite decodes and re-encodes camera pixels).
 passes::GroundShadowSettings groundShadowSettings(const PipelineSettings& settings);
+
+// The `lights` section's fit settings, with the camera's transfer (the
+// border and the post are read in camera codes).
+ibl::LightingFitSettings lightingFitSettings(const PipelineSettings& settings);
 
 }  // namespace probelight

@@ -193,16 +193,6 @@ std::array<glm::dvec3, 4> tagCornersWorld(double tag_size_m) {
   return {glm::dvec3(-h, -h, 0.0), glm::dvec3(h, -h, 0.0), glm::dvec3(h, h, 0.0), glm::dvec3(-h, h, 0.0)};
 }
 
-double rotationDifferenceDeg(const glm::dmat3& a, const glm::dmat3& b) {
-  // atan2 of sine and cosine parts keeps precision at small angles, where
-  // acos of the trace alone bottoms out near 1e-6 degrees.
-  glm::dmat3 relative = glm::transpose(a) * b;
-  double cosine = (relative[0][0] + relative[1][1] + relative[2][2] - 1.0) / 2.0;
-  glm::dvec3 axis_times_sine(relative[1][2] - relative[2][1], relative[2][0] - relative[0][2],
-                             relative[0][1] - relative[1][0]);
-  return glm::degrees(std::atan2(glm::length(axis_times_sine) / 2.0, cosine));
-}
-
 std::vector<TagPoseSolution> solveTagPoses(const std::array<glm::dvec2, 4>& corners_px, double tag_size_m,
                                            const CameraIntrinsics& camera) {
   std::vector<TagPoseSolution> solutions;

@@ -37,7 +37,7 @@ std::vector<TagPoseSolution> solveTagPoses(const std::array<glm::dvec2, 4>& corn
                                            const CameraIntrinsics& camera);
 
 // Angle (degrees) of the rotation taking one camera orientation to the other.
-double rotationDifferenceDeg(const glm::dmat3& a, const glm::dmat3& b);
+inline double rotationDifferenceDeg(const glm::dmat3& a, const glm::dmat3& b) { return rotationAngleDeg(a, b); }
 
 struct PoseChoice {
   std::size_t index = 0;   // into the solutions, best first

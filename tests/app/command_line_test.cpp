@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include "app/command_line.hpp"
 
 namespace probelight {
@@ -36,6 +38,110 @@ TEST(CommandLine, BadFlagsNameTheFlag) {
   EXPECT_NE(message({"--source", "images"}).find("--images"), std::string::npos);
   EXPECT_NE(message({"--source", "images", "--images", "x/*.png"}).find("--camera"), std::string::npos);
   for (const auto& args : std::vector<std::vector<std::string>>{{"--bogus"}, {"--frames", "ten"}})
+    EXPECT_EQ(message(args).find('\n'), std::string::npos) << "one line";
+}
+
+// -h and --help, for every command: HelpRequested with that command's own
+// flags, each on a line with its description.
+TEST(CommandLine, HelpForEveryCommandWithLongAndShortFlag) {
+  using Parse = std::function<void(const std::vector<std::string>&)>;
+  const struct {
+    std::string command;
+    Parse parse;
+    std::vector<std::string> own_flags;
+    std::string not_its_flag;
+  } commands[] = {
+      {"run", [](auto& args) { parseRunOptions(args); }, {"--frames", "-n,", "--source", "--quiet", "(default 300)"}, "--bracket"},
+      {"analyze", [](auto& args) { parseAnalyzeOptions(args); }, {"--bracket", "--frame", "--no-white-ref"}, "--radius"},
+      {"render", [](auto& args) { parseRenderOptions(args); }, {"--bracket", "--radius", "--albedo", "sphere|box"}, "--quiet"},
+      {"calibrate-camera", [](auto& args) { parseCalibrateCameraOptions(args); }, {"--board", "--square", "--images"},
+       "--frames"},
+  };
+  for (const auto& c : commands) {
+    for (const std::string help : {"--help", "-h"}) {
+      // Also after other flags, even ones that would be errors: help wins.
+      for (const std::vector<std::string>& args : {std::vector<std::string>{help}, std::vector<std::string>{"--bogus", help}}) {
+        std::string text;
+        try {
+          c.parse(args);
+          ADD_FAILURE() << c.command << " " << help << ": no help";
+        } catch (const HelpRequested& requested) {
+          text = requested.text;
+        } catch (const UsageError& error) {
+          ADD_FAILURE() << c.command << " " << help << ": " << error.what();
+        }
+        EXPECT_NE(text.find("probelight " + c.command), std::string::npos) << text;
+        EXPECT_NE(text.find("-h,--help"), std::string::npos) << text;
+        EXPECT_NE(text.find("exit status"), std::string::npos) << text;
+        for (const auto& flag : c.own_flags) EXPECT_NE(text.find(flag), std::string::npos) << c.command << ": " << flag;
+        EXPECT_EQ(text.find(c.not_its_flag), std::string::npos) << c.command << ": " << c.not_its_flag;
+      }
+    }
+  }
+}
+
+TEST(CommandLine, OverviewListsTheCommandsAndExitStatuses) {
+  const std::string text = usageText();
+  for (const char* word : {"run", "analyze", "render", "calibrate-camera", "--help", "--version", "exit status", "3 (analyze, render)"})
+    EXPECT_NE(text.find(word), std::string::npos) << word;
+}
+
+TEST(CommandLine, ShortFlagsParseLikeLongOnes) {
+  const RunOptions longs = parseRunOptions({"--frames", "12", "--out", "o", "--config", "p.yaml", "--quiet"});
+  const RunOptions shorts = parseRunOptions({"-n", "12", "-o", "o", "-c", "p.yaml", "-q"});
+  const RunOptions packed = parseRunOptions({"-qn12", "-oo", "-c", "p.yaml"});
+  for (const RunOptions* options : {&longs, &shorts, &packed}) {
+    EXPECT_EQ(options->frames, 12);
+    EXPECT_EQ(options->out_dir, "o");
+    EXPECT_EQ(options->config_path, "p.yaml");
+    EXPECT_TRUE(options->quiet);
+  }
+  EXPECT_FALSE(parseRunOptions({}).quiet);
+
+  const AnalyzeOptions analyze = parseAnalyzeOptions({"-f", "f.png", "--camera", "c.yaml", "--rig", "r.yaml", "-o", "o", "-c", "p.yaml"});
+  EXPECT_EQ(analyze.frame_path, "f.png");
+  EXPECT_EQ(analyze.out_dir, "o");
+  EXPECT_EQ(analyze.config_path, "p.yaml");
+  const RenderOptions render = parseRenderOptions({"-f", "f.png", "--camera", "c.yaml", "--rig", "r.yaml", "-o", "o", "--radius", "0.03"});
+  EXPECT_EQ(render.frame.frame_path, "f.png");
+  EXPECT_EQ(render.frame.out_dir, "o");
+  const CalibrateCameraOptions calibrate = parseCalibrateCameraOptions({"--images", "v/*.png", "--board", "9x6", "--square", "0.025", "-o", "c.yaml"});
+  EXPECT_EQ(calibrate.out_path, "c.yaml");
+}
+
+TEST(CommandLine, ARepeatedFlagTakesItsLastValue) {
+  const RunOptions options = parseRunOptions({"--frames", "3", "--out", "a", "-n", "7", "-o", "b", "--source=images", "--source",
+                                              "sim", "--frames=9"});
+  EXPECT_EQ(options.frames, 9);
+  EXPECT_EQ(options.out_dir, "b");
+  EXPECT_EQ(options.source, "sim");
+  const AnalyzeOptions analyze =
+      parseAnalyzeOptions({"--frame", "a.png", "--frame", "b.png", "--camera", "c.yaml", "--rig", "r.yaml", "--out", "o",
+                           "--bracket", "u3.png@-3", "--bracket=o2.png@2"});
+  EXPECT_EQ(analyze.frame_path, "b.png");
+  ASSERT_EQ(analyze.brackets.size(), 2u) << "--bracket adds one each time";
+  EXPECT_EQ(analyze.brackets[0].path, "u3.png");
+  EXPECT_EQ(analyze.brackets[1].ev, 2.0);
+}
+
+TEST(CommandLine, UsageErrorsAreOneLineNamingTheFlag) {
+  auto message = [](std::vector<std::string> args) {
+    try {
+      parseRunOptions(args);
+    } catch (const UsageError& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message({"-n"}).find("flag --frames needs a value"), std::string::npos) << message({"-n"});
+  EXPECT_NE(message({"--frames="}).find("flag --frames needs a value"), std::string::npos);
+  EXPECT_NE(message({"--frames=", "5"}).find("flag --frames needs a value"), std::string::npos);
+  EXPECT_NE(message({"-n", "ten"}).find("--frames"), std::string::npos);
+  EXPECT_NE(message({"--bogus=3"}).find("'--bogus'"), std::string::npos);
+  EXPECT_NE(message({"-x"}).find("'-x'"), std::string::npos);
+  EXPECT_NE(message({"--quiet=no"}).find("--quiet"), std::string::npos);
+  EXPECT_NE(message({"--frames", "3", "4"}).find("'4'"), std::string::npos);
+  for (const auto& args : std::vector<std::vector<std::string>>{{"-n"}, {"--bogus=3"}, {"-x"}, {"--frames", "3", "4"}})
     EXPECT_EQ(message(args).find('\n'), std::string::npos) << "one line";
 }
 

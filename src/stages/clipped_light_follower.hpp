@@ -1,0 +1,46 @@
+// The last fit's clipped lights, followed between fits. The frame-rate maps
+// are 8-bit, and the clipped lights carry what they clip. After each map
+// update each light is scaled by the share of its texels that still clip
+// now over the share that did at the fit (a sun gone behind a cloud, a lamp
+// switched off: 0), and by the exposure now over the exposure then (auto
+// exposure runs again after a fit, and the maps are in the camera's linear
+// units). Pure: the caller reads the map back.
+#pragma once
+
+#include <vector>
+
+#include "ibl/cube_map.hpp"
+#include "ibl/white_reference.hpp"
+
+namespace probelight {
+
+class ClippedLightFollower {
+ public:
+  // A fit's lights, followed against the 8-bit map they were found beside
+  // and the fit frame's exposure time x gain (1: unknown).
+  void follow(std::vector<ibl::ClippedLight> lights, const ibl::CubeMapRGB& map_at_fit, double clip_level,
+              double exposure_at_fit);
+  // Lights kept from an earlier run, with what they were followed against
+  // (a missing share is 0: that light cannot be followed and keeps scale 1).
+  void restore(std::vector<ibl::ClippedLight> lights, std::vector<double> share_at_fit, double exposure_at_fit);
+
+  // Each light's scale for a later map `live` of the same size, taken at
+  // `exposure_now` (exposure time x gain).
+  std::vector<double> scalesFor(const ibl::CubeMapRGB& live, double clip_level, double exposure_now) const;
+
+  bool empty() const { return lights_.empty(); }
+  const std::vector<ibl::ClippedLight>& lights() const { return lights_; }
+  const std::vector<double>& shareAtFit() const { return share_at_fit_; }
+  double exposureAtFit() const { return exposure_at_fit_; }
+
+ private:
+  std::vector<ibl::ClippedLight> lights_;
+  std::vector<double> share_at_fit_;
+  double exposure_at_fit_ = 1.0;
+};
+
+// Exposure time times gain (1 when the source cannot say): camera-linear
+// values scale with it.
+double exposureProduct(double exposure_us, double analogue_gain);
+
+}  // namespace probelight

@@ -1,0 +1,65 @@
+#include "stages/compose_stage.hpp"
+
+#include <algorithm>
+
+#include <opencv2/imgproc.hpp>
+
+#include "stages/gpu_stage_timer.hpp"
+
+namespace probelight {
+
+const std::vector<std::uint8_t>& StatusOverlay::render(const std::string& text, int width, int height) {
+  if (text == text_ && width == width_ && height == height_) return rgba_;
+  text_ = text;
+  width_ = width;
+  height_ = height;
+  cv::Mat canvas(height, width, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+  const double scale = std::max(0.4, width / 1280.0);
+  int baseline = 0;
+  const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+  const int bar_height = size.height + baseline + 12;
+  cv::rectangle(canvas, cv::Rect(0, height - bar_height, width, bar_height), cv::Scalar(0, 0, 0, 160), cv::FILLED);
+  cv::putText(canvas, text, cv::Point(8, height - baseline - 6), cv::FONT_HERSHEY_SIMPLEX, scale,
+              cv::Scalar(255, 255, 255, 255), 1, cv::LINE_AA);
+  rgba_.assign(canvas.data, canvas.data + canvas.total() * 4);
+  return rgba_;
+}
+
+ComposeStage::ComposeStage(const SceneObject& object, const CameraIntrinsics& camera, RunReport& report,
+                           bool finish_gpu)
+    : object_(object), camera_(camera), report_(report), finish_gpu_(finish_gpu) {
+  if (object_.shape.shape == ibl::ShadowCaster::Shape::kBox) mesh_ = passes::boxMesh(object_.shape);
+}
+
+Status ComposeStage::init(const gles::Capabilities& capabilities, passes::CubeStorage storage) {
+  std::string error;
+  if (!compositor_.init(capabilities, passes::ObjectCompositorSettings{}, storage, error))
+    return Status::runtimeFailure("GPU set-up failed: " + error);
+  return Status::ok();
+}
+
+Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::string& status,
+                          const passes::CameraFrameTexture& frame, MapsStage& maps, ShadowsStage& shadows,
+                          const ibl::SceneLighting& lighting) {
+  GpuStageTimer timer(report_, kStageName, finish_gpu_);
+  std::string error;
+  compositor_.drawCameraBackground(frame);
+  if (track.found && maps.haveMaps()) {
+    // The shadow first: the object then covers the part of it under itself.
+    if (!shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error)) return Status::runtimeFailure(error);
+    const bool drawn =
+        mesh_.empty()
+            ? compositor_.drawSphereObject(camera_, track.pose, object_.shape.boundingCentre(), object_.shape.radius_m,
+                                           object_.material, lighting, maps.maps(), error)
+            : compositor_.drawMeshObject(camera_, track.pose, mesh_, object_.material, lighting, maps.maps(), error);
+    if (!drawn) return Status::runtimeFailure(error);
+  }
+  if (!status.empty()) {
+    const auto& rgba = overlay_.render(status, camera_.width_px, camera_.height_px);
+    if (!compositor_.drawOverlayRGBA(rgba.data(), camera_.width_px, camera_.height_px, error))
+      return Status::runtimeFailure(error);
+  }
+  return Status::ok();
+}
+
+}  // namespace probelight

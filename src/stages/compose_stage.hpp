@@ -1,0 +1,70 @@
+// The compose stage: over the camera image, the object's shadow on the real
+// ground, the object itself lit from the maps (passes/object_compositor),
+// and the status bar when something needs saying. It draws into whatever
+// framebuffer is bound: the display's, or a render target (`render`).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/status.hpp"
+#include "core/types.hpp"
+#include "gles/capabilities.hpp"
+#include "ibl/ground_shadow.hpp"
+#include "ibl/surface_shading.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/object_compositor.hpp"
+#include "stages/maps_stage.hpp"
+#include "stages/run_report.hpp"
+#include "stages/shadows_stage.hpp"
+#include "tracking/tag_tracker.hpp"
+
+namespace probelight {
+
+// The virtual object: its shape and where it stands (a sphere or a box on
+// the ground of W; the same description casts its shadow), and its material.
+struct SceneObject {
+  ibl::ShadowCaster shape;
+  ibl::SurfaceMaterial material;
+};
+
+// Status text drawn over the frame with OpenCV's Hershey font, re-rendered
+// only when the text changes.
+class StatusOverlay {
+ public:
+  const std::vector<std::uint8_t>& render(const std::string& text, int width, int height);
+
+ private:
+  std::string text_;
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<std::uint8_t> rgba_;
+};
+
+class ComposeStage {
+ public:
+  static constexpr const char* kStageName = "render";
+
+  ComposeStage(const SceneObject& object, const CameraIntrinsics& camera, RunReport& report, bool finish_gpu);
+  // `storage`: the maps' (the object's shaders decode them).
+  Status init(const gles::Capabilities& capabilities, passes::CubeStorage storage);
+
+  // The frame: `track` places the shadow and the object (neither without a
+  // tag, nor before the first maps: the object would be black).
+  Status draw(const tracking::TagTrackResult& track, const std::string& status, const passes::CameraFrameTexture& frame,
+              MapsStage& maps, ShadowsStage& shadows, const ibl::SceneLighting& lighting);
+  // The display still holds what was drawn last: shown again, not drawn.
+  void skip(const std::string& reason) { report_.recordStageSkip(kStageName, reason); }
+
+ private:
+  SceneObject object_;
+  CameraIntrinsics camera_;
+  RunReport& report_;
+  bool finish_gpu_;
+  passes::ObjectCompositor compositor_;
+  std::vector<passes::ObjectCompositor::MeshVertex> mesh_;  // a box's triangles (empty for a sphere)
+  StatusOverlay overlay_;
+};
+
+}  // namespace probelight
