@@ -1,6 +1,8 @@
 // `probelight analyze`: one camera frame in, what the system sees out.
-// Runs the same stages as `probelight run` (tag tracker, ball outline, GPU
-// reflection and diffuse maps) on one frame and writes DIR/analysis.json and
+// Runs the same stages as `probelight run` (src/stages: track, maps, the
+// lighting fit of ibl/lighting_fit.hpp, and for render shadows and compose),
+// with the same probelight.yaml, on one frame and its bracket, and writes
+// DIR/analysis.json and
 // pictures a person can check by eye: overlay.png (tag outline, W axes, ball
 // outline on the frame), ball.png (the ball, enlarged), reflection_cross.png
 // and diffuse_cross.png (the cube maps unfolded).

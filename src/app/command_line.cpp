@@ -255,8 +255,7 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
         [&](auto& f, auto& v) { options.save_every = static_cast<int>(parseInteger(f, v, 0)); }},
        {"-o,--out", "DIR", "output folder for frames and report.json (default out)", into(options.out_dir)},
        {"--capture", "DIR",
-        "at the end, keep the last camera frame (frame.png) with its camera.yaml and rig.yaml in DIR, "
-        "as analyze and render take them",
+        "keep the last camera frame with its camera.yaml and rig.yaml in DIR (for analyze, render)",
         into(options.capture_dir)},
        {"--env", "NAME|FILE", "sim: studio, sun_sky, overcast, coloured_wall, uniform, or an .exr/.hdr file",
         into(options.sim_env)},

@@ -6,8 +6,15 @@
 
 namespace probelight::ibl {
 
+// The BT.709 luminance weights applied to three per-channel quantities
+// (numbers, or vectors such as a light's first moment per channel).
+template <typename T>
+T luminanceWeighted(const T& r, const T& g, const T& b) {
+  return 0.2126 * r + 0.7152 * g + 0.0722 * b;
+}
+
 // Relative luminance of linear Rec.709 / sRGB primaries (ITU-R BT.709).
-inline double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+inline double luminance(const glm::dvec3& rgb) { return luminanceWeighted(rgb.r, rgb.g, rgb.b); }
 
 // IEC 61966-2-1 piecewise sRGB curve, values in [0, 1].
 double srgbToLinear(double encoded);

@@ -349,7 +349,7 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
   // Beyond max_lights, the faintest clusters join the nearest kept one (a
   // first moment adds).
   auto momentEnergy = [](const Cluster& cluster) {
-    return glm::length(0.2126 * cluster.moment[0] + 0.7152 * cluster.moment[1] + 0.0722 * cluster.moment[2]);
+    return glm::length(luminanceWeighted(cluster.moment[0], cluster.moment[1], cluster.moment[2]));
   };
   std::sort(clusters.begin(), clusters.end(),
             [&](const Cluster& a, const Cluster& b) { return momentEnergy(a) > momentEnergy(b); });
@@ -366,7 +366,7 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
   std::vector<ClippedLight> lights;
   for (std::size_t k = 0; k < kept; ++k) {
     const glm::dvec3 luminance_moment =
-        0.2126 * clusters[k].moment[0] + 0.7152 * clusters[k].moment[1] + 0.0722 * clusters[k].moment[2];
+        luminanceWeighted(clusters[k].moment[0], clusters[k].moment[1], clusters[k].moment[2]);
     const double length = glm::length(luminance_moment);
     if (!(length > 0.0)) continue;
     ClippedLight light;

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
+
+#include "ibl/color_transfer.hpp"
 
 namespace probelight {
 
@@ -14,7 +17,7 @@ ibl::DomeLight blendLights(const ibl::DomeLight& from, const ibl::DomeLight& to,
   const double angle = std::acos(cosine);
   if (angle < 1e-6) {
     light.direction_w = to.direction_w;
-  } else if (angle > 3.14159) {  // opposite: any great circle; go over the zenith
+  } else if (angle > std::numbers::pi - 1e-5) {  // opposite: any great circle; go over the zenith
     light.direction_w = glm::normalize((1.0 - t) * from.direction_w + t * to.direction_w + glm::dvec3(0, 0, 1e-3));
   } else {
     light.direction_w = (std::sin((1.0 - t) * angle) * from.direction_w + std::sin(t * angle) * to.direction_w) /
@@ -40,7 +43,7 @@ void LightTransition::retarget(const std::vector<ibl::DomeLight>& target, double
   // that the brightest lights move the least.
   std::vector<std::size_t> order(target.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  auto luminance = [](const glm::dvec3& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; };
+  using ibl::luminance;
   std::stable_sort(order.begin(), order.end(),
                    [&](std::size_t a, std::size_t b) { return luminance(target[a].rgb) > luminance(target[b].rgb); });
   std::vector<bool> used(shown.size(), false);

@@ -1,7 +1,7 @@
-// AppSettings (probelight.yaml) turned into the settings of the pipeline's
-// stages, in one place, so that `probelight run` and `probelight analyze`
-// build the same tracker and the same maps from the same file and their
-// numbers can be compared.
+// probelight.yaml's stage sections (PipelineSettings) turned into the
+// settings of the passes and the maths they drive, in one place, so that
+// `run`, `analyze` and `render` build the same tracker, maps, shadows and
+// lighting fit from the same file, and their numbers can be compared.
 #pragma once
 
 #include "stages/pipeline_settings.hpp"

@@ -21,15 +21,17 @@ TEST(CommandLine, AcceptsFlagEqualsValue) {
   EXPECT_EQ(options.key_path, "/tmp/fifo");
 }
 
+// What `probelight run ARGS` says is wrong with its flags ("no error": nothing).
+std::string message(const std::vector<std::string>& args) {
+  try {
+    parseRunOptions(args);
+  } catch (const UsageError& error) {
+    return std::string(error.what());
+  }
+  return std::string("no error");
+}
+
 TEST(CommandLine, BadFlagsNameTheFlag) {
-  auto message = [](std::vector<std::string> args) {
-    try {
-      parseRunOptions(args);
-    } catch (const UsageError& error) {
-      return std::string(error.what());
-    }
-    return std::string("no error");
-  };
   EXPECT_NE(message({"--bogus"}).find("'--bogus'"), std::string::npos);
   EXPECT_NE(message({"--frames", "ten"}).find("--frames"), std::string::npos);
   EXPECT_NE(message({"--frames", "-3"}).find("--frames"), std::string::npos);
@@ -125,14 +127,6 @@ TEST(CommandLine, ARepeatedFlagTakesItsLastValue) {
 }
 
 TEST(CommandLine, UsageErrorsAreOneLineNamingTheFlag) {
-  auto message = [](std::vector<std::string> args) {
-    try {
-      parseRunOptions(args);
-    } catch (const UsageError& error) {
-      return std::string(error.what());
-    }
-    return std::string("no error");
-  };
   EXPECT_NE(message({"-n"}).find("flag --frames needs a value"), std::string::npos) << message({"-n"});
   EXPECT_NE(message({"--frames="}).find("flag --frames needs a value"), std::string::npos);
   EXPECT_NE(message({"--frames=", "5"}).find("flag --frames needs a value"), std::string::npos);

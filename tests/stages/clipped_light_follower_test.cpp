@@ -1,0 +1,99 @@
+// The last fit's clipped lights followed between fits: each scaled by the
+// share of its texels still clipped now over the share clipped at the fit,
+// times the exposure now over the exposure then. Synthetic 4^2 maps, so every
+// expected scale follows from the rule by hand.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "ibl/cube_map.hpp"
+#include "stages/clipped_light_follower.hpp"
+
+namespace probelight {
+namespace {
+
+constexpr double kClip = 1.0;  // a texel at or above this clipped
+
+// A light of four texels on face +Z (indices 0..3), a quarter of its energy
+// each, and a second one of two texels on face -Z, 0.75 and 0.25.
+std::vector<ibl::ClippedLight> twoLights() {
+  ibl::ClippedLight sun;
+  sun.irradiance_rgb = glm::dvec3(4.0);
+  sun.texels = {4 * 16 + 0, 4 * 16 + 1, 4 * 16 + 2, 4 * 16 + 3};
+  sun.texel_share = {0.25f, 0.25f, 0.25f, 0.25f};
+  ibl::ClippedLight lamp;
+  lamp.irradiance_rgb = glm::dvec3(1.0);
+  lamp.texels = {5 * 16 + 0, 5 * 16 + 1};
+  lamp.texel_share = {0.75f, 0.25f};
+  return {sun, lamp};
+}
+
+// A 4^2 map with the given texels (face * 16 + index) at the clip level, the
+// rest at a tenth of it.
+ibl::CubeMapRGB mapClippedAt(const std::vector<int>& clipped) {
+  ibl::CubeMapRGB map(4);
+  for (auto& face : map.faces)
+    for (glm::vec3& texel : face) texel = glm::vec3(0.1f);
+  for (int t : clipped) map.faces[t / 16][t % 16] = glm::vec3(0.2f, static_cast<float>(kClip), 0.3f);
+  return map;
+}
+
+TEST(ClippedLightFollower, AStillSceneKeepsEveryLightWhole) {
+  ClippedLightFollower follower;
+  const ibl::CubeMapRGB at_fit = mapClippedAt({64, 65, 66, 67, 80, 81});
+  follower.follow(twoLights(), at_fit, kClip, 8000.0);
+  ASSERT_EQ(follower.shareAtFit().size(), 2u);
+  EXPECT_DOUBLE_EQ(follower.shareAtFit()[0], 1.0);
+  EXPECT_DOUBLE_EQ(follower.shareAtFit()[1], 1.0);
+  const std::vector<double> scale = follower.scalesFor(at_fit, kClip, 8000.0);
+  ASSERT_EQ(scale.size(), 2u);
+  EXPECT_DOUBLE_EQ(scale[0], 1.0);
+  EXPECT_DOUBLE_EQ(scale[1], 1.0);
+}
+
+TEST(ClippedLightFollower, ALightThatLeavesItsTexelsFadesByTheirShare) {
+  ClippedLightFollower follower;
+  follower.follow(twoLights(), mapClippedAt({64, 65, 66, 67, 80, 81}), kClip, 8000.0);
+  // Half the sun's texels no longer clip (a cloud over half of it); the
+  // lamp's larger texel is dark (0.25 of it is left).
+  const std::vector<double> scale = follower.scalesFor(mapClippedAt({64, 65, 81}), kClip, 8000.0);
+  EXPECT_DOUBLE_EQ(scale[0], 0.5);
+  EXPECT_NEAR(scale[1], 0.25, 1e-7);  // shares are floats
+  // Switched off altogether.
+  EXPECT_DOUBLE_EQ(follower.scalesFor(mapClippedAt({}), kClip, 8000.0)[1], 0.0);
+}
+
+TEST(ClippedLightFollower, ScalesWithTheExposureAndNeverAboveWhatWasMeasured) {
+  ClippedLightFollower follower;
+  // At the fit only half the sun clipped (its edge was in the map's range).
+  follower.follow(twoLights(), mapClippedAt({64, 65, 80, 81}), kClip, 8000.0);
+  EXPECT_DOUBLE_EQ(follower.shareAtFit()[0], 0.5);
+  // Now all of it clips (the sun is no brighter for that: the share is
+  // capped at the fit's), and auto exposure doubled the exposure: the maps,
+  // in the camera's linear units, read twice what they did for the same
+  // light, and the clipped lights, measured in those units, follow them.
+  const std::vector<double> scale = follower.scalesFor(mapClippedAt({64, 65, 66, 67, 80, 81}), kClip, 16000.0);
+  EXPECT_DOUBLE_EQ(scale[0], 2.0);
+  EXPECT_DOUBLE_EQ(scale[1], 2.0);
+}
+
+TEST(ClippedLightFollower, ALightNothingOfWhichClippedAtTheFitCannotBeFollowed) {
+  ClippedLightFollower follower;
+  // Stored lighting from an older file: no shares. Each light keeps scale 1
+  // but for the exposure.
+  follower.restore(twoLights(), {}, 4000.0);
+  ASSERT_EQ(follower.shareAtFit().size(), 2u);
+  EXPECT_DOUBLE_EQ(follower.shareAtFit()[1], 0.0);
+  const std::vector<double> scale = follower.scalesFor(mapClippedAt({}), kClip, 2000.0);
+  EXPECT_DOUBLE_EQ(scale[0], 0.5);
+  EXPECT_DOUBLE_EQ(scale[1], 0.5);
+}
+
+TEST(ClippedLightFollower, AnUnknownExposureCountsAsOne) {
+  EXPECT_DOUBLE_EQ(exposureProduct(0.0, 4.0), 1.0);      // the source cannot say
+  EXPECT_DOUBLE_EQ(exposureProduct(8000.0, 0.0), 8000.0);  // no gain said: 1
+  EXPECT_DOUBLE_EQ(exposureProduct(8000.0, 2.0), 16000.0);
+}
+
+}  // namespace
+}  // namespace probelight
