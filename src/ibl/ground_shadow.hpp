@@ -1,5 +1,5 @@
 // Shadows of a virtual object on the real ground, from the dome of lights:
-// the model the GPU stage (pipeline/ground_shadow.hpp) implements, and its
+// the model the GPU pass (passes/ground_shadow.hpp) implements, and its
 // CPU reference.
 //
 // The real ground is a phantom: it gets no virtual light, only the share of

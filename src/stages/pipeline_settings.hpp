@@ -49,7 +49,7 @@ struct ProbeRefinementConfig {
 };
 
 // The dome of shadow-casting lights (ibl/light_dome.hpp) and the ground
-// shadow (pipeline/ground_shadow.hpp).
+// shadow (passes/ground_shadow.hpp).
 struct LightsConfig {
   ibl::LightDomeSettings dome;  // count 8, clustered placement
   double fade_s = 0.5;          // new lights move and fade in over this long
@@ -110,7 +110,7 @@ struct CameraConfig {
   double reconnect_max_interval_s = 30.0;
 };
 
-// Where the kiosk keeps what must survive a restart (app/state_store.hpp).
+// Where the kiosk keeps what must survive a restart (stages/state_store.hpp).
 struct StateConfig {
   std::string dir;  // empty: nothing is kept (the desktop default; the board uses /var/lib/probelight)
 };

@@ -214,7 +214,7 @@ TEST_F(ShadowAccuracy, GroundAttenuationAgainstTheTruthAndTheDominantLightAgains
 // Issue 7: with an exposure bracket, the shadow against the full-HDR truth.
 // The simulated camera takes the same view at EV 0, -3, -6, ... until the
 // ball stops clipping; the frames are merged as `run` merges its own
-// (app/bracket_merge.hpp), the dome (clustered, the default) is fitted from
+// (stages/bracket_merge.hpp), the dome (clustered, the default) is fitted from
 // the HDR map, and the GPU's ground fraction is compared with
 // World::groundShadow's HDR truth. The 8-bit frame's figure beside it.
 TEST_F(ShadowAccuracy, WithABracketTheShadowMatchesTheHdrTruth) {
