@@ -169,7 +169,9 @@ TEST_F(ServiceUnit, StderrLinesCarryJournalPrioritiesUnderSystemd) {
     warnings += line.rfind("<4>", 0) == 0 ? 1 : 0;
     infos += line.rfind("<6>", 0) == 0 ? 1 : 0;
   }
-  if (!fs::exists("/dev/gpiochip0")) EXPECT_EQ(warnings, 1) << warned.stderr_text;  // the missing button
+  if (!fs::exists("/dev/gpiochip0")) {
+    EXPECT_EQ(warnings, 1) << warned.stderr_text;  // the missing button
+  }
   EXPECT_GE(infos, 2);
   EXPECT_EQ(bad.exit_status, 2);
   EXPECT_EQ(bad.stderr_text.rfind("<3>probelight: ", 0), 0u) << bad.stderr_text;
