@@ -14,10 +14,10 @@
 
 #include "app/analysis_output.hpp"
 #include "app/app_settings.hpp"
+#include "capture/rgb_image_io.hpp"
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
 #include "config/rig_file.hpp"
-#include "core/apriltag_families.hpp"
 #include "core/log_priority.hpp"
 #include "gles/capabilities.hpp"
 #include "gles/egl_context.hpp"
@@ -47,14 +47,6 @@ Json vec2Json(const glm::dvec2& v) { return Json::array({v.x, v.y}); }
 const auto vec3 = vec3Json<Json>;
 
 std::string sizeText(int width, int height) { return std::to_string(width) + "x" + std::to_string(height); }
-
-ImageRGB8 rgbFromBgr(const cv::Mat& bgr) {
-  ImageRGB8 rgb;
-  rgb.resize(bgr.cols, bgr.rows);
-  cv::Mat view(bgr.rows, bgr.cols, CV_8UC3, rgb.pixels.data());
-  cv::cvtColor(bgr, view, cv::COLOR_BGR2RGB);
-  return rgb;
-}
 
 // One frame through the stages `run` uses (track, maps, the lighting fit,
 // and for `render` shadows and compose), with the same settings, each step
@@ -326,8 +318,7 @@ class Analyzer {
     inputs.view = &ctx_->view;
     inputs.read_pixel = [this](int x, int y) { return frame_.rgbAt(x, y); };
     inputs.rig = rig_;
-    if (const AprilTagFamilyHandle family = createAprilTagFamily(rig_.tag_family))
-      inputs.white_ring = ibl::tagWhiteRing(family->width_at_border, family->reversed_border, rig_.tag_size_m);
+    inputs.white_ring = tagWhiteRingOf(rig_);
     fit_ = ibl::fitLighting(inputs, lightingFitSettings(settings_));
     for (const std::string& warning : fit_.warnings)
       log_ << logPrefix(LogPriority::kWarning) << "probelight: " << command() << ": warning: " << warning << "\n";
@@ -416,9 +407,7 @@ class Analyzer {
                          {"region_centre_w", vec2Json(shadows.pass().region().centre_w)},
                          {"region_half_size_m", shadows.pass().region().half_size_m},
                          {"darkest_fraction", darkest}}}};
-    cv::Mat rgb(composite.height, composite.width, CV_8UC3, composite.pixels.data()), bgr;
-    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-    if (save("composite.png", bgr)) json_["render"]["composite"] = "composite.png";
+    if (save("composite.png", bgrFromRgb(composite))) json_["render"]["composite"] = "composite.png";
     return Status::ok();
   }
 

@@ -5,14 +5,11 @@
 #include <ostream>
 
 #include "core/log_priority.hpp"
+#include "core/monotonic_clock.hpp"
 
 namespace probelight {
 
 namespace {
-
-double monotonicNowS() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 constexpr std::chrono::milliseconds kFrameWait{2000};
 

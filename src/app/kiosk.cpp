@@ -9,20 +9,19 @@
 #include <optional>
 #include <thread>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "app/app_settings.hpp"
 #include "app/camera_link.hpp"
 #include "app/service_notify.hpp"
 #include "app/shutdown_request.hpp"
 #include "capture/image_frame_source.hpp"
 #include "capture/libcamera_source.hpp"
+#include "capture/rgb_image_io.hpp"
 #include "capture/sim_frame_source.hpp"
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
 #include "config/rig_file.hpp"
 #include "core/log_priority.hpp"
+#include "core/monotonic_clock.hpp"
 #include "display/display.hpp"
 #include "gles/capabilities.hpp"
 #include "input/button_source.hpp"
@@ -72,10 +71,6 @@ LoadedInputs loadInputs(const RunOptions& options) {
   return inputs;
 }
 
-double monotonicNowS() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 // The virtual object of probelight.yaml's `object` section: a sphere resting
 // on the ground.
 SceneObject sceneObject(const PipelineSettings& settings) {
@@ -104,8 +99,8 @@ class Kiosk {
     const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
     source_->stop();
     PROBELIGHT_TRY(status);
-    PROBELIGHT_TRY(writeCapture());
-    return writeReport(elapsed_s);
+    PROBELIGHT_TRY(writeReport(elapsed_s));
+    return writeCapture();
   }
 
  private:
@@ -256,6 +251,14 @@ class Kiosk {
     } catch (const config::ConfigError& error) {
       return Status::badInput(error.what());
     }
+    if (!options_.capture_dir.empty()) {
+      // Made now, so that a folder that cannot be made costs nothing but its message.
+      std::error_code ec;
+      fs::create_directories(options_.capture_dir, ec);
+      if (ec || !fs::is_directory(options_.capture_dir))
+        return Status::badInput(options_.capture_dir + ": cannot create the folder (--capture)" +
+                                (ec ? ": " + ec.message() : std::string()));
+    }
     PROBELIGHT_TRY(makeSource());
     const AppSettings& settings = inputs_.settings;
     std::string error;
@@ -381,13 +384,7 @@ class Kiosk {
   Status writeCapture() const {
     if (options_.capture_dir.empty() || last_pipeline_frame_.empty()) return Status::ok();
     const fs::path dir = options_.capture_dir;
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    const ImageRGB8& rgb = last_pipeline_frame_;
-    cv::Mat bgr;
-    cv::cvtColor(cv::Mat(rgb.height, rgb.width, CV_8UC3, const_cast<std::uint8_t*>(rgb.pixels.data())), bgr,
-                 cv::COLOR_RGB2BGR);
-    if (!cv::imwrite((dir / "frame.png").string(), bgr))
+    if (!writeRgbImage((dir / "frame.png").string(), last_pipeline_frame_))
       return Status::runtimeFailure("cannot write " + (dir / "frame.png").string() + " (--capture)");
     try {
       config::saveCameraFile((dir / "camera.yaml").string(), inputs_.camera);

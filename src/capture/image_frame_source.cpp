@@ -1,4 +1,5 @@
 #include "capture/image_frame_source.hpp"
+#include "capture/rgb_image_io.hpp"
 
 #include <glob.h>
 
@@ -90,9 +91,7 @@ ThreadedFrameSource::Produced ImageFrameSource::produce(std::uint64_t index, Fra
       std::cerr << "probelight: warning: skipping '" << path << "': not a readable image\n";
       continue;
     }
-    buffer.rgb.resize(bgr.cols, bgr.rows);
-    cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, buffer.rgb.pixels.data());
-    cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+    rgbFromBgr(bgr, buffer.rgb);
     buffer.finishRgb();
     buffer.metadata = FrameMetadata{};
     buffer.metadata.sequence = index;

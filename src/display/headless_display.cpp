@@ -4,6 +4,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "capture/rgb_image_io.hpp"
 #include "display/display.hpp"
 #include "display/kms_display.hpp"
 #include "gles/egl_context.hpp"
@@ -51,12 +52,8 @@ bool HeadlessDisplay::present(std::uint64_t frame_number, std::string& error) {
   char name[32];
   std::snprintf(name, sizeof name, "frame_%06llu.png", static_cast<unsigned long long>(frame_number));
   last_kept_path_ = out_dir_ / name;
-  // OpenCV wants BGR; wrap our RGB bytes and let imwrite swap through a copy.
-  cv::Mat rgb(last_kept_.height, last_kept_.width, CV_8UC3, last_kept_.pixels.data());
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
   // Compression level 1: PNG encoding would otherwise cost more than a frame.
-  if (!cv::imwrite(last_kept_path_.string(), bgr, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+  if (!writeRgbImage(last_kept_path_.string(), last_kept_, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
     error = "headless display: cannot write " + last_kept_path_.string();
     return false;
   }

@@ -6,7 +6,6 @@
 #include <ostream>
 #include <sstream>
 
-#include "core/apriltag_families.hpp"
 #include "core/log_priority.hpp"
 #include "ibl/color_transfer.hpp"
 #include "ibl/hdr_bracket.hpp"
@@ -262,9 +261,7 @@ Status LightsStage::fitLights(std::uint64_t frame_number, const FitFrame& fit_fr
     inputs.read_pixel = fit_frame.read_pixel;
     inputs.rig = rig_;
     // The border is read only where the fit may use it.
-    if (const AprilTagFamilyHandle family = createAprilTagFamily(rig_.tag_family);
-        family && config.white_reference && !inputs.hdr_map)
-      inputs.white_ring = ibl::tagWhiteRing(family->width_at_border, family->reversed_border, rig_.tag_size_m);
+    if (config.white_reference && !inputs.hdr_map) inputs.white_ring = tagWhiteRingOf(rig_);
     fit = ibl::fitLighting(inputs, lightingFitSettings(settings_));
   }
   if (fit.method == ibl::LightingFitMethod::kBracket)

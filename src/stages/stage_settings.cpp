@@ -1,5 +1,7 @@
 #include "stages/stage_settings.hpp"
 
+#include "core/apriltag_families.hpp"
+
 #include <algorithm>
 
 namespace probelight {
@@ -60,6 +62,12 @@ ibl::LightingFitSettings lightingFitSettings(const PipelineSettings& settings) {
   fit.post_reference = settings.lights.post_reference;
   fit.dome = settings.lights.dome;
   return fit;
+}
+
+std::optional<ibl::WhiteRing> tagWhiteRingOf(const RigGeometry& rig) {
+  const AprilTagFamilyHandle family = createAprilTagFamily(rig.tag_family);
+  if (!family) return std::nullopt;
+  return ibl::tagWhiteRing(family->width_at_border, family->reversed_border, rig.tag_size_m);
 }
 
 }  // namespace probelight

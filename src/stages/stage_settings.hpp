@@ -4,6 +4,8 @@
 // lighting fit from the same file, and their numbers can be compared.
 #pragma once
 
+#include <optional>
+
 #include "stages/pipeline_settings.hpp"
 #include "core/types.hpp"
 #include "ibl/lighting_fit.hpp"
@@ -29,6 +31,11 @@ ibl::SurfaceMaterial objectMaterial(const PipelineSettings& settings);
 // The `lights` section's shadow settings, with the camera's transfer (the
 // composite decodes and re-encodes camera pixels).
 passes::GroundShadowSettings groundShadowSettings(const PipelineSettings& settings);
+
+// The white ring of rig.yaml's tag (its family's border geometry at its
+// size), where the lighting fit reads the light on the ground; none for a
+// family libapriltag does not know (rig.yaml's reader refuses those).
+std::optional<ibl::WhiteRing> tagWhiteRingOf(const RigGeometry& rig);
 
 // The `lights` section's fit settings, with the camera's transfer (the
 // border and the post are read in camera codes).

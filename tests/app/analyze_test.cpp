@@ -457,6 +457,31 @@ TEST_F(Analyze, Sh9DiffuseMethodGivesTheSh9Map) {
   EXPECT_GE(worst_cosine, 0.02) << "the two methods must differ for the test to tell which one ran";
 }
 
+// A ball whose image the kiosk's maps stage would not use (all white: a
+// lamp straight into the ball, overexposure) makes no maps in analyze
+// either: exit 3, analysis.json says why, with the tag and the ball found.
+TEST_F(Analyze, ABallTheMapsStageRefusesIsExit3SayingWhy) {
+  const sim::SceneConfig scene = sim::defaultScene();
+  const sim::World world(scene);
+  ImageRGB8 rgb;
+  FrameTruth truth;
+  world.render(0, rgb, truth);
+  ASSERT_GT(truth.probe_radius_px, 8.0);
+  // The ball painted white (its disc and a pixel beyond), the tag untouched.
+  cv::Mat image(rgb.height, rgb.width, CV_8UC3, rgb.pixels.data());
+  cv::circle(image, cv::Point(cvRound(truth.probe_center_px.x), cvRound(truth.probe_center_px.y)),
+             static_cast<int>(std::ceil(truth.probe_radius_px)) + 1, cv::Scalar(255, 255, 255), cv::FILLED);
+  const CommandResult result = run(writeInputs(scene, rgb));
+  EXPECT_EQ(result.exit_status, kAnalyzeNotFoundExitStatus) << result.stderr_text;
+  expectOneLine(result);
+  EXPECT_NE(result.stderr_text.find("ball saturated"), std::string::npos) << result.stderr_text;
+  const nlohmann::json analysis = readAnalysis();
+  EXPECT_EQ(analysis["tag"]["status"], "found");
+  EXPECT_TRUE(analysis.contains("probe"));
+  EXPECT_FALSE(analysis.contains("irradiance")) << "no maps, so no light";
+  EXPECT_NE(analysis["error"].get<std::string>().find("ball saturated"), std::string::npos);
+}
+
 TEST_F(Analyze, MissingFrameIsExit2NamingIt) {
   config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
   config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});

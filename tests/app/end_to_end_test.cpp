@@ -415,6 +415,47 @@ TEST_F(EndToEnd, BadInputIsOneLineNamingTheProblemAndExitStatus2) {
   EXPECT_FALSE(fs::exists(dir_ / "out" / "report.json")) << "nothing ran";
 }
 
+// --capture DIR keeps the last frame the pipeline ran on as the camera gave
+// it (no object, no shadow, no status bar), with the calibration and rig it
+// was seen through: analyze runs on it as the README says. A folder that cannot be made is bad input,
+// said before anything runs.
+TEST_F(EndToEnd, CaptureKeepsTheLastRawFrameForAnalyze) {
+  const fs::path out = dir_ / "out";
+  const fs::path capture = out / "capture";
+  const CommandResult result =
+      run("run --source sim --frames 12 --quiet --out " + out.string() + " --capture " + capture.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const cv::Mat raw = cv::imread((capture / "frame.png").string());
+  const cv::Mat composited = cv::imread((out / "frame_000011.png").string());
+  ASSERT_FALSE(raw.empty());
+  ASSERT_EQ(raw.size(), composited.size());
+  // The composite adds the object: frame 11 as kept differs from it where
+  // the sphere stands, and only the pipeline's drawing can make it differ.
+  cv::Mat difference;
+  cv::absdiff(raw, composited, difference);
+  EXPECT_GT(cv::countNonZero(difference.reshape(1) > 40), 500) << "the kept frame must be the raw one";
+  const CameraIntrinsics camera = config::loadCameraFile((capture / "camera.yaml").string());
+  EXPECT_EQ(camera.width_px, raw.cols);
+  const CommandResult analyzed = run("analyze --frame " + (capture / "frame.png").string() + " --camera " +
+                                     (capture / "camera.yaml").string() + " --rig " + (capture / "rig.yaml").string() +
+                                     " --out " + (dir_ / "analysis").string());
+  ASSERT_EQ(analyzed.exit_status, 0) << analyzed.stderr_text;
+  std::ifstream in(dir_ / "analysis" / "analysis.json");
+  const nlohmann::json analysis = nlohmann::json::parse(in);
+  EXPECT_EQ(analysis["tag"]["status"], "found");
+  EXPECT_TRUE(analysis.contains("irradiance")) << "the ball was found and its maps made";
+
+  // Bad input: one line naming the flag, nothing run.
+  std::ofstream(dir_ / "a_file") << "not a folder\n";
+  const fs::path blocked = dir_ / "blocked";
+  const CommandResult bad = run("run --source sim --frames 5 --out " + blocked.string() + " --capture " +
+                                (dir_ / "a_file" / "capture").string());
+  EXPECT_EQ(bad.exit_status, 2) << bad.stderr_text;
+  EXPECT_NE(bad.stderr_text.find("--capture"), std::string::npos) << bad.stderr_text;
+  EXPECT_EQ(std::count(bad.stderr_text.begin(), bad.stderr_text.end(), '\n'), 1) << bad.stderr_text;
+  EXPECT_FALSE(fs::exists(blocked / "report.json")) << "nothing ran";
+}
+
 TEST_F(EndToEnd, KeyButtonRecalibratesTheLights) {
   const fs::path fifo = dir_ / "button";
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);

@@ -1,0 +1,23 @@
+// RGB8 images (probelight's byte order) to and from OpenCV's BGR8, and to
+// image files: the one place the channel order is swapped.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/types.hpp"
+
+namespace probelight {
+
+// `bgr` (CV_8UC3) into `rgb`, resized (its storage reused where it fits).
+void rgbFromBgr(const cv::Mat& bgr, ImageRGB8& rgb);
+ImageRGB8 rgbFromBgr(const cv::Mat& bgr);
+// A BGR copy of `rgb`, as OpenCV's drawing and imwrite take it.
+cv::Mat bgrFromRgb(const ImageRGB8& rgb);
+// `rgb` written to `path` (the format from its extension; `params` as
+// cv::imwrite's). False when it cannot be written.
+bool writeRgbImage(const std::string& path, const ImageRGB8& rgb, const std::vector<int>& params = {});
+
+}  // namespace probelight
