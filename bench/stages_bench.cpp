@@ -448,19 +448,16 @@ bool updateDiffuseMap(passes::EnvironmentMaps& maps, bool sh9, std::string& erro
   return reflection && maps.updateDiffuseFromSH9(ibl::projectToSH9(*reflection, &validity), error);
 }
 
-// The diffuse benchmarks' name: "face" is the diffuse map's size; the
-// intermediate map (after the east pass) is named only where it differs from
-// it ("diffuse_blur/half/face:16/half_taps:16" has a 16² intermediate map,
-// "diffuse_blur/half/intermediate:32/face:16/half_taps:16" the app's 32²).
-std::string diffuseName(bool eight_bit, int intermediate_face_size, int face_size, int half_taps, bool sh9) {
+// The diffuse benchmarks' name: "face" is the diffuse map's size, "rows"
+// the latitude-longitude maps' (after the east and north passes).
+std::string diffuseName(bool eight_bit, int intermediate_rows, int face_size, int half_taps, bool sh9) {
   const std::string storage = eight_bit ? "8bit" : "half";
   if (sh9) return "diffuse_sh9/" + storage + "/face:" + std::to_string(face_size);
-  return "diffuse_blur/" + storage +
-         (intermediate_face_size != face_size ? "/intermediate:" + std::to_string(intermediate_face_size) : "") +
-         "/face:" + std::to_string(face_size) + "/half_taps:" + std::to_string(half_taps);
+  return "diffuse_blur/" + storage + "/rows:" + std::to_string(intermediate_rows) + "/face:" +
+         std::to_string(face_size) + "/half_taps:" + std::to_string(half_taps);
 }
 
-void diffuseBlur(benchmark::State& state, bool eight_bit, int intermediate_face_size, int face_size, int half_taps,
+void diffuseBlur(benchmark::State& state, bool eight_bit, int intermediate_rows, int face_size, int half_taps,
                  bool sh9 = false) {
   if (!requireGl(state)) return;
   Setup& s = setup();
@@ -468,15 +465,15 @@ void diffuseBlur(benchmark::State& state, bool eight_bit, int intermediate_face_
   std::string error;
   FrameTextures frames;
   passes::EnvironmentMaps maps;
-  passes::EnvironmentMapSettings settings;  // reflection 64, prefilter 16, 4 iterations, pole_direct 20 deg
-  settings.intermediate_face_size = intermediate_face_size;
+  passes::EnvironmentMapSettings settings;  // reflection 64, prefilter 16, 4 iterations
+  settings.intermediate_rows = intermediate_rows;
   settings.diffuse_face_size = face_size;
   settings.blur_half_taps = half_taps;
   if (!frames.init(capabilities, error) || !maps.init(capabilities, settings, error)) {
     state.SkipWithError(error.c_str());
     return;
   }
-  const std::string name = diffuseName(eight_bit, intermediate_face_size, face_size, half_taps, sh9);
+  const std::string name = diffuseName(eight_bit, intermediate_rows, face_size, half_taps, sh9);
   bool failed = false;
   const ErrorRow& row = errorsFor(name, [&] {
     ErrorRow r;
@@ -889,25 +886,28 @@ void registerAll() {
             ->UseRealTime()
             ->MinTime(kMinTime);
 
-  // The sweep: the intermediate map as large as the diffuse one.
-  for (int face : {8, 16, 32})
-    for (int taps : {4, 8, 16})
-      benchmark::RegisterBenchmark(diffuseName(false, face, face, taps, false).c_str(),
-                                   [=](benchmark::State& state) { diffuseBlur(state, false, face, face, taps); })
+  // The sweep: rows of the latitude-longitude maps (the north pass's taps) by
+  // the east pass's taps.
+  for (int rows : {16, 32, 64})
+    for (int taps : {4, 8, 16}) {
+      if (rows == passes::EnvironmentMapSettings{}.intermediate_rows && taps == 16) continue;  // the default, below
+      benchmark::RegisterBenchmark(diffuseName(false, rows, 16, taps, false).c_str(),
+                                   [=](benchmark::State& state) { diffuseBlur(state, false, rows, 16, taps); })
           ->Unit(kMillisecond)
           ->UseRealTime()
           ->MinTime(kMinTime);
-  // The 8-bit path at 32²/8 half-taps (kept for comparison with earlier runs).
+    }
+  // The 8-bit path at a 32² diffuse map and 8 half-taps (kept for comparison with earlier runs).
   benchmark::RegisterBenchmark(diffuseName(true, 32, 32, 8, false).c_str(),
                                [](benchmark::State& state) { diffuseBlur(state, true, 32, 32, 8); })
       ->Unit(kMillisecond)
       ->UseRealTime()
       ->MinTime(kMinTime);
-  // The app's own default (passes::EnvironmentMapSettings: intermediate 32,
+  // The app's own default (passes::EnvironmentMapSettings: 32 rows,
   // diffuse 16, 16 half-taps), half float and 8-bit.
   {
     const passes::EnvironmentMapSettings defaults;
-    const int intermediate = defaults.intermediate_face_size, face = defaults.diffuse_face_size,
+    const int intermediate = defaults.intermediate_rows, face = defaults.diffuse_face_size,
               taps = defaults.blur_half_taps;
     for (bool eight_bit : {false, true})
       benchmark::RegisterBenchmark(diffuseName(eight_bit, intermediate, face, taps, false).c_str(),

@@ -22,16 +22,23 @@ AppSettings loadAppSettings(const std::string& path) {
   if (stages.reflection_face_size % stages.prefilter_face_size != 0 || factor > 8)
     maps.fail("prefilter_face_size", "must divide face_size (" + std::to_string(stages.reflection_face_size) +
                                          ") by a factor of 1 to 8");
-  stages.intermediate_face_size =
-      maps.readInt("intermediate_face_size", stages.intermediate_face_size, Range::closed(4, 256));
+  // Fields of the cube intermediate map the diffuse passes no longer use: a
+  // clear word instead of "unknown field" for a file written for it.
+  if (maps.has("intermediate_face_size"))
+    maps.fail("intermediate_face_size",
+              "no longer used: the diffuse passes now keep a latitude-longitude map; set intermediate_rows instead");
+  if (maps.has("pole_direct_deg"))
+    maps.fail("pole_direct_deg",
+              "no longer used: the diffuse passes' latitude-longitude map has no pole to correct; remove the line");
+  stages.intermediate_rows = maps.readInt("intermediate_rows", stages.intermediate_rows, Range::closed(4, 128));
+  if (stages.intermediate_rows % 2 != 0)
+    maps.fail("intermediate_rows", std::to_string(stages.intermediate_rows) + " is odd (the north pass needs an even count)");
   stages.diffuse_face_size = maps.readInt("diffuse_face_size", stages.diffuse_face_size, Range::closed(4, 256));
   stages.blur_half_taps = maps.readInt("half_taps", stages.blur_half_taps, Range::closed(1, 32));
-  stages.pole_direct_deg = maps.readDouble("pole_direct_deg", stages.pole_direct_deg, Range::closed(0.0, 90.0));
   stages.normal_iterations = maps.readInt("normal_iterations", stages.normal_iterations, Range::closed(1, 16));
   // Powers of two: the passes divide sizes into one another (prefilter,
   // glossy levels), and GLES2 limits non-power-of-two textures.
   for (const auto& [field, size] : {std::pair{"prefilter_face_size", stages.prefilter_face_size},
-                                    {"intermediate_face_size", stages.intermediate_face_size},
                                     {"diffuse_face_size", stages.diffuse_face_size}})
     if ((size & (size - 1)) != 0) maps.fail(field, std::to_string(size) + " is not a power of two");
   const std::string transfer = maps.readString("camera_transfer", "srgb", {"srgb", "gamma", "linear"});

@@ -52,10 +52,9 @@ void setFaceUniforms(const gles::Program& program, int face) {
 ibl::CosineIrradianceSettings cosineIrradianceSettings(const EnvironmentMapSettings& settings) {
   ibl::CosineIrradianceSettings cosine;
   cosine.prefilter_face_size = settings.prefilter_face_size;
-  cosine.intermediate_face_size = settings.intermediate_face_size;
+  cosine.intermediate_rows = settings.intermediate_rows;
   cosine.output_face_size = settings.diffuse_face_size;
   cosine.half_taps = settings.blur_half_taps;
-  cosine.pole_direct_deg = settings.pole_direct_deg;
   return cosine;
 }
 
@@ -78,8 +77,7 @@ std::string cubeStorageDefines(CubeStorage storage) {
 bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const EnvironmentMapSettings& settings,
                            std::string& error) {
   settings_ = settings;
-  for (int size : {settings.reflection_face_size, settings.prefilter_face_size, settings.intermediate_face_size,
-                   settings.diffuse_face_size}) {
+  for (int size : {settings.reflection_face_size, settings.prefilter_face_size, settings.diffuse_face_size}) {
     if (size < 2 || size > capabilities.max_cube_map_size_px) {
       error = "EnvironmentMaps: cube face size " + std::to_string(size) + " must be in [2, " +
               std::to_string(capabilities.max_cube_map_size_px) + "] (the GPU's GL_MAX_CUBE_MAP_TEXTURE_SIZE)";
@@ -96,8 +94,16 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
     return false;
   }
   if (settings.normal_iterations < 0 || settings.normal_iterations > 16 || settings.blur_half_taps < 0 ||
-      settings.blur_half_taps > 32 || !(settings.pole_direct_deg >= 0.0 && settings.pole_direct_deg <= 90.0)) {
-    error = "EnvironmentMaps: normal_iterations must be 0..16, blur_half_taps 0..32 and pole_direct_deg 0..90";
+      settings.blur_half_taps > 32) {
+    error = "EnvironmentMaps: normal_iterations must be 0..16 and blur_half_taps 0..32";
+    return false;
+  }
+  // Even: the north pass's taps are whole rows, symmetric about the texel.
+  if (settings.intermediate_rows < 4 || settings.intermediate_rows > 128 || settings.intermediate_rows % 2 != 0 ||
+      2 * settings.intermediate_rows > capabilities.max_texture_size_px) {
+    error = "EnvironmentMaps: intermediate_rows " + std::to_string(settings.intermediate_rows) +
+            " must be even, in [4, 128], and twice it no more than the GPU's GL_MAX_TEXTURE_SIZE " +
+            std::to_string(capabilities.max_texture_size_px);
     return false;
   }
   if (settings.glossy_levels < 0 || settings.glossy_levels > 2 || settings.glossy_half_taps < 1 ||
@@ -166,9 +172,10 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
   probe_program_ = std::move(*probe_program);
   const std::string cosine_defines = storage_defines + "#define HALF_TAPS " +
                                      std::to_string(settings.blur_half_taps) + "\n#define PREFILTER_FACTOR " +
-                                     std::to_string(prefilter_factor) + "\n";
+                                     std::to_string(prefilter_factor) + "\n#define LATLONG_ROWS " +
+                                     std::to_string(settings.intermediate_rows) + "\n";
   for (auto [program, pass] : {std::pair{&prefilter_program_, "PREFILTER_PASS"}, std::pair{&east_program_, "EAST_PASS"},
-                               std::pair{&north_program_, "NORTH_PASS"}}) {
+                               std::pair{&north_program_, "NORTH_PASS"}, std::pair{&resample_program_, "RESAMPLE_PASS"}}) {
     auto compiled = gles::Program::fromEmbedded("cube_face.vert", "cosine_irradiance.frag",
                                                 cosine_defines + "#define " + pass + " 1\n", error);
     if (!compiled) return false;
@@ -180,7 +187,14 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
 
   if (!allocate(reflection_, settings.reflection_face_size, error)) return false;
   if (!allocate(prefiltered_, settings.prefilter_face_size, error)) return false;
-  if (!allocate(intermediate_, settings.intermediate_face_size, error)) return false;
+  const GLenum texel_type = storage_ == CubeStorage::kLinearHalfFloat ? GL_HALF_FLOAT_OES : GL_UNSIGNED_BYTE;
+  for (GpuLatLongMap* map : {&east_latlong_, &north_latlong_}) {
+    auto texture = gles::createTexture2D(2 * settings.intermediate_rows, settings.intermediate_rows, GL_RGBA,
+                                         texel_type, GL_NEAREST, nullptr, error);
+    if (!texture) return false;
+    map->texture = std::move(*texture);
+    map->rows = settings.intermediate_rows;
+  }
   if (!allocate(diffuse_, settings.diffuse_face_size, error)) return false;
   if (!allocate(diffuse_spare_, settings.diffuse_face_size, error)) return false;
   diffuse_written_ = false;
@@ -362,6 +376,23 @@ float blendedScale(float new_scale, float previous_scale, float new_weight) {
 }
 }  // namespace
 
+bool EnvironmentMaps::latLongPass(const gles::Program& program, GpuLatLongMap& output, float input_scale,
+                                  float output_scale, const char* what, std::string& error) {
+  FramebufferStateGuard guard;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
+  glViewport(0, 0, 2 * output.rows, output.rows);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  program.use();
+  glUniform1f(program.uniform("u_input_scale"), input_scale);
+  glUniform1f(program.uniform("u_output_scale"), output_scale);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, output.texture.id(), 0);
+  quad_.draw(program.attribute("a_position"));
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, 0, 0);
+  output.linear_scale = output_scale;
+  return gles::checkGl(what, error);
+}
+
 bool EnvironmentMaps::updateDiffuse(std::string& error, float new_weight) {
   const auto weight = diffuseBlendWeight(new_weight, "EnvironmentMaps::updateDiffuse", error);
   if (!weight) return false;
@@ -372,22 +403,34 @@ bool EnvironmentMaps::updateDiffuse(std::string& error, float new_weight) {
   const float input_scale = reflection_.linear_scale;
   if (!cosinePass(prefilter_program_, reflection_, prefiltered_, input_scale, "EnvironmentMaps prefilter pass", error))
     return false;
-  if (!cosinePass(east_program_, prefiltered_, intermediate_, input_scale, "EnvironmentMaps east pass", error))
+  east_program_.use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, prefiltered_.texture.id());
+  glUniform1i(east_program_.uniform("u_input"), 0);
+  glUniform1f(east_program_.uniform("u_input_face_size"), static_cast<float>(prefiltered_.face_size));
+  if (!latLongPass(east_program_, east_latlong_, prefiltered_.linear_scale, input_scale, "EnvironmentMaps east pass",
+                   error))
+    return false;
+  north_program_.use();
+  glBindTexture(GL_TEXTURE_2D, east_latlong_.texture.id());
+  glUniform1i(north_program_.uniform("u_latlong"), 0);
+  if (!latLongPass(north_program_, north_latlong_, east_latlong_.linear_scale, input_scale,
+                   "EnvironmentMaps north pass", error))
     return false;
   const float scale =
       storage_ == CubeStorage::kSrgb8 ? blendedScale(input_scale, diffuse_.linear_scale, *weight) : 1.0f;
-  north_program_.use();
-  bindPreviousDiffuse(north_program_, *weight);
+  resample_program_.use();
+  bindPreviousDiffuse(resample_program_, *weight);
+  // Unit 2: a 2D sampler, so unit 0 keeps a cube map bound for u_input
+  // (declared by every pass of the file; unused here).
   glActiveTexture(GL_TEXTURE2);
-  glBindTexture(GL_TEXTURE_CUBE_MAP, prefiltered_.texture.id());
-  glUniform1i(north_program_.uniform("u_prefiltered"), 2);
-  glUniform1f(north_program_.uniform("u_prefiltered_face_size"), static_cast<float>(prefiltered_.face_size));
-  glUniform1f(north_program_.uniform("u_prefiltered_scale"), prefiltered_.linear_scale);
-  glUniform1f(north_program_.uniform("u_pole_cosine"),
-              static_cast<float>(std::cos(settings_.pole_direct_deg * M_PI / 180.0)));
+  glBindTexture(GL_TEXTURE_2D, north_latlong_.texture.id());
+  glUniform1i(resample_program_.uniform("u_latlong"), 2);
   glActiveTexture(GL_TEXTURE0);
-  if (!cosinePass(north_program_, intermediate_, diffuse_spare_, scale, "EnvironmentMaps north pass", error))
+  if (!cosinePass(resample_program_, prefiltered_, diffuse_spare_, scale, "EnvironmentMaps resampling pass", error))
     return false;
+  // cosinePass set u_input_scale to the prefiltered map's scale; the north
+  // map has the same one (both are the reflection map's).
   swapDiffuse(scale);
   return true;
 }

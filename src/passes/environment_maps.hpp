@@ -1,8 +1,8 @@
 // Stages 2 and 3: the mirror ball's image to a reflection cube map, and that
 // map integrated on the sphere into a diffuse cube map holding E(n) / pi.
 // GPU versions of ibl::probeImageToCubeMap and
-// ibl::irradianceOverPiByCosinePasses (prefilter, east cos^2 pass, north cos
-// pass with the pole correction, normalised convolution of validity),
+// ibl::irradianceOverPiByCosinePasses (prefilter, east cos^2 pass and north
+// cos pass on latitude-longitude maps, normalised convolution of validity),
 // checked against them in tests/gles.
 //
 // Storage (chosen at init from the capabilities):
@@ -29,8 +29,10 @@
 // not care which made it:
 //   updateDiffuse          ibl::irradianceOverPiByCosinePasses: prefilter
 //                          (reflection_face_size -> prefilter_face_size),
-//                          east pass (-> intermediate_face_size), north pass
-//                          with the pole correction (-> diffuse_face_size);
+//                          east pass (-> an intermediate_rows x
+//                          2 intermediate_rows latitude-longitude map), north
+//                          pass along its columns (-> a second one), and the
+//                          resampling to the cube (-> diffuse_face_size);
 //   updateDiffuseFromSH9   R&H's 9-coefficient irradiance. GLES2 has no
 //                          compute shaders and no render-to-9-values
 //                          reduction worth its passes, so the projection runs
@@ -82,12 +84,11 @@ namespace probelight::passes {
 struct EnvironmentMapSettings {
   int reflection_face_size = 64;    // seed A: a 640x480 frame rarely shows the ball above 64 px
   int prefilter_face_size = 16;     // about the tap spacing; must divide reflection_face_size (factor <= 8)
-  int intermediate_face_size = 32;  // after the east pass
+  int intermediate_rows = 32;  // of the latitude-longitude maps after the east and north passes (even, 4..128)
   int diffuse_face_size = 16;
   int normal_iterations = 4;  // unrolled in the shader; ibl::ProbeToCubeParams::normal_iterations
   ibl::CameraTransfer camera_transfer;  // how the camera's values decode to linear light (sRGB by default)
   int blur_half_taps = 16;    // 2 * half_taps + 1 taps a pass, pi / (2 half_taps + 1) apart; 0..32
-  double pole_direct_deg = 20.0;  // north taps this close to +-Z integrate their east circle directly; 0..90
 
   // Glossy levels (updateGlossy; ibl::glossyMap, see src/ibl/glossy_maps.hpp
   // for why these): the reflection map convolved with cos^n lobes, sharpest
@@ -98,7 +99,7 @@ struct EnvironmentMapSettings {
   std::array<int, 2> glossy_face_size{32, 16};
   std::array<int, 2> glossy_intermediate_face_size{64, 32};
   int glossy_half_taps = 8;  // 2 * half_taps + 1 taps a pass over [-3 sigma, 3 sigma]; 1..32
-  double glossy_pole_direct_deg = 10.0;  // as pole_direct_deg, for the glossy north passes
+  double glossy_pole_direct_deg = 10.0;  // glossy north taps this close to +-Z integrate their east circle directly
 };
 
 // The CPU reference's settings for glossy level `level`.
@@ -116,6 +117,14 @@ struct GpuCubeMap {
   float linear_scale = 1.0f;  // kSrgb8 only (see above); 1 for half floats
 };
 
+// A latitude-longitude map (ibl::LatLongRGB's layout: row y at colatitude
+// (y + 0.5) pi / rows) in a NEAREST-filtered 2D texture, same storage.
+struct GpuLatLongMap {
+  gles::Texture texture;
+  int rows = 0;  // columns: 2 rows
+  float linear_scale = 1.0f;
+};
+
 class EnvironmentMaps {
  public:
   bool init(const gles::Capabilities& capabilities, const EnvironmentMapSettings& settings, std::string& error);
@@ -128,10 +137,11 @@ class EnvironmentMaps {
   // `validity` (layout as read*'s) becomes alpha; without it alpha is 1.
   bool setReflection(const ibl::CubeMapRGB& reflection, std::string& error,
                      const std::vector<float>* validity = nullptr);
-  // Stage 3: prefilter pass into the prefiltered map, east pass into the
-  // intermediate map, north pass (with the pole correction and the division
-  // by coverage) into the diffuse map. new_weight in [0, 1]: the share of
-  // this update in the result (1: no blending, the map is replaced; see above).
+  // Stage 3: prefilter pass into the prefiltered map, east pass into the east
+  // latitude-longitude map, north pass into the north one, and the
+  // resampling (with the division by coverage) into the diffuse map.
+  // new_weight in [0, 1]: the share of this update in the result (1: no
+  // blending, the map is replaced; see above).
   bool updateDiffuse(std::string& error, float new_weight = 1.0f);
   // Stage 3, SH9 alternative: renders max(0, E(n)) / pi from `sh` (see
   // ibl::sh9DiffuseMap) into the diffuse map, alpha 1, blended as above. In
@@ -150,9 +160,8 @@ class EnvironmentMaps {
   // Read back in linear units (8-bit path decoded). `validity`, when given,
   // receives alpha laid out like CubeMapRGB::faces (face-major, row-major).
   std::optional<ibl::CubeMapRGB> readReflection(std::string& error, std::vector<float>* validity = nullptr) const;
-  // The prefiltered and intermediate maps as stored: rgb premultiplied by alpha.
+  // The prefiltered map as stored: rgb premultiplied by alpha.
   std::optional<ibl::CubeMapRGB> readPrefiltered(std::string& error, std::vector<float>* validity = nullptr) const;
-  std::optional<ibl::CubeMapRGB> readIntermediate(std::string& error, std::vector<float>* validity = nullptr) const;
   std::optional<ibl::CubeMapRGB> readDiffuse(std::string& error, std::vector<float>* validity = nullptr) const;
   std::optional<ibl::CubeMapRGB> readGlossy(int level, std::string& error, std::vector<float>* validity = nullptr) const;
 
@@ -176,6 +185,10 @@ class EnvironmentMaps {
   // One pass of updateDiffuse over the six faces of `output`.
   bool cosinePass(const gles::Program& program, const GpuCubeMap& input, GpuCubeMap& output, float output_scale,
                   const char* what, std::string& error);
+  // One pass of updateDiffuse into a latitude-longitude map; the input is
+  // bound by the caller.
+  bool latLongPass(const gles::Program& program, GpuLatLongMap& output, float input_scale, float output_scale,
+                   const char* what, std::string& error);
   // Checks new_weight and returns the one to use (1 before any diffuse map exists).
   std::optional<float> diffuseBlendWeight(float new_weight, const char* caller, std::string& error) const;
   // Binds the current diffuse map as u_previous (texture unit 1) for
@@ -192,12 +205,14 @@ class EnvironmentMaps {
   gles::Program prefilter_program_;
   gles::Program east_program_;
   gles::Program north_program_;
+  gles::Program resample_program_;
   gles::Program sh9_program_;
   gles::FullScreenQuad quad_;
   gles::Framebuffer framebuffer_;
   GpuCubeMap reflection_;
   GpuCubeMap prefiltered_;
-  GpuCubeMap intermediate_;
+  GpuLatLongMap east_latlong_;
+  GpuLatLongMap north_latlong_;
   GpuCubeMap diffuse_;
   GpuCubeMap diffuse_spare_;  // the ping-pong partner: the next update writes here, reading diffuse_
   bool diffuse_written_ = false;

@@ -163,10 +163,6 @@ std::optional<ibl::CubeMapRGB> EnvironmentMaps::readPrefiltered(std::string& err
                                                                 std::vector<float>* validity) const {
   return readCube(prefiltered_, error, validity);
 }
-std::optional<ibl::CubeMapRGB> EnvironmentMaps::readIntermediate(std::string& error,
-                                                                 std::vector<float>* validity) const {
-  return readCube(intermediate_, error, validity);
-}
 std::optional<ibl::CubeMapRGB> EnvironmentMaps::readDiffuse(std::string& error, std::vector<float>* validity) const {
   return readCube(diffuse_, error, validity);
 }

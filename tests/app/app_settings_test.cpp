@@ -19,10 +19,9 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   const AppSettings defaults;
   EXPECT_EQ(from_file.maps.stages.reflection_face_size, defaults.maps.stages.reflection_face_size);
   EXPECT_EQ(from_file.maps.stages.prefilter_face_size, defaults.maps.stages.prefilter_face_size);
-  EXPECT_EQ(from_file.maps.stages.intermediate_face_size, defaults.maps.stages.intermediate_face_size);
+  EXPECT_EQ(from_file.maps.stages.intermediate_rows, defaults.maps.stages.intermediate_rows);
   EXPECT_EQ(from_file.maps.stages.diffuse_face_size, defaults.maps.stages.diffuse_face_size);
   EXPECT_EQ(from_file.maps.stages.blur_half_taps, defaults.maps.stages.blur_half_taps);
-  EXPECT_DOUBLE_EQ(from_file.maps.stages.pole_direct_deg, defaults.maps.stages.pole_direct_deg);
   EXPECT_EQ(from_file.maps.stages.normal_iterations, defaults.maps.stages.normal_iterations);
   EXPECT_EQ(from_file.maps.diffuse_method, defaults.maps.diffuse_method);
   EXPECT_EQ(from_file.maps.stages.camera_transfer.curve, defaults.maps.stages.camera_transfer.curve);
@@ -153,6 +152,10 @@ TEST(AppSettings, MapUpdateFieldsAreRangeChecked) {
     }
   };
   expectRejected("map_updates:\n  smoothing_new_weight: 0\n", "map_updates.smoothing_new_weight");
+  // The cube intermediate's fields, gone with it: named, with what replaced them.
+  expectRejected("environment_maps:\n  pole_direct_deg: 20\n", "environment_maps.pole_direct_deg");
+  expectRejected("environment_maps:\n  intermediate_face_size: 32\n", "intermediate_rows");
+  expectRejected("environment_maps:\n  intermediate_rows: 31\n", "environment_maps.intermediate_rows");
   expectRejected("map_updates:\n  max_age_frames: 0\n", "map_updates.max_age_frames");
   expectRejected("map_updates:\n  max_center_shift_px: -1\n", "map_updates.max_center_shift_px");
   expectRejected("map_updates:\n  change_treshold_code: 3\n", "change_treshold_code");

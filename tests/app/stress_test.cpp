@@ -264,7 +264,7 @@ std::vector<BadField> badFields() {
   std::vector<BadField> out;
   // probelight.yaml: every float field (board/probelight.yaml lists them).
   const std::vector<std::pair<std::string, std::string>> app_scalars = {
-      {"environment_maps", "pole_direct_deg"},   {"tracking", "quad_decimate"},
+      {"environment_maps", "camera_gamma"},      {"tracking", "quad_decimate"},
       {"tracking", "quad_sigma"},                {"object", "radius"},
       {"object", "k_specular"},                  {"object", "shininess"},
       {"object", "k_reflect"},                   {"map_updates", "min_probe_radius_px"},

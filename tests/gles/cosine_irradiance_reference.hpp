@@ -3,8 +3,9 @@
 // the GPU may be from it, derived from the storage and the shader's floats.
 //
 // The GPU computes P = L(R V) and A = L(V) (premultiplied radiance and
-// coverage; L = prefilter, east cos^2, north cos with the pole correction,
-// all weighted means with non-negative weights, so |L(e)| <= L(|e|)), then
+// coverage; L = prefilter, east cos^2 into a latitude-longitude map, north
+// cos on it, bilinear resampling to the cube: all weighted means with
+// non-negative weights, so |L(e)| <= L(|e|)), then
 // rgb = P / A. With errors eP, eA on P and A, |rgb - P / A| <= (eP + F eA) / A
 // (first order; F = P / A). eP and eA collect, each pushed through the part
 // of L that follows the point where it enters (the CPU functions are those
@@ -15,21 +16,27 @@
 //    approximate pow in encode and decode, 0.1 level each, llvmpipe's fetch
 //    returning some bytes up to ~0.15 level low: 0.7 level for rgb at the
 //    reflection's scale, 0.75 / 255 for alpha; half floats: 2^-11 relative),
-//    through the east pass and the pole taps: L' = L without its prefilter,
-//    computed as L of the map upsampled by constant blocks;
+//    through the rest of L: L' = L without its prefilter, computed as L of
+//    the map upsampled by constant blocks;
 //  - the prefilter's weights: the shader weights a texel by the solid-angle
 //    density at its centre, (1 + u^2 + v^2)^-1.5, not by
 //    ibl::cubeTexelSolidAngle; with delta the largest relative difference of
 //    the two normalised weights in any block (computed below: ~1e-4), the
 //    block mean moves by <= delta * (max - min of the block);
-//  - the intermediate map's storage (as the prefiltered map's), through the
-//    north pass's intermediate taps (bounded by the whole north pass);
-//  - fp32 tap directions: ~1e-5 rad of error (single precision through
-//    normalize, cross and the tap rotation, and llvmpipe's polynomial
-//    sin/cos) moves a bilinear sample by <= 1e-5 * face_size texels, which
-//    changes it by at most that times the spread of the 3x3 texels around
-//    each corner of its cell (the "dilated spread" maps below);
-//  - fp32 sums of up to 33^2 terms and the division: 40 u of the value,
+//  - the east latitude-longitude map's storage (as the prefiltered map's),
+//    through the north pass and the resampling (the north taps fetch texel
+//    centres: no direction error there);
+//  - the north map's storage, through the resampling;
+//  - fp32 directions: ~1e-5 rad of error (single precision through
+//    normalize, cross, atan and the tap rotation, and llvmpipe's polynomial
+//    sin/cos) moves a bilinear sample of the prefiltered cube by
+//    <= 1e-5 * face_size texels, and the resampling's lookup in the north
+//    map by <= 1e-5 * columns / (2 pi sin theta) texels (azimuth is
+//    ill-conditioned near the poles; theta >= that of the cube texel centre
+//    nearest a pole), which changes each by at most that times the spread of
+//    the 3x3 texels around each corner of its cell (the "dilated spread"
+//    maps below);
+//  - fp32 sums of up to 2 x 33 terms and the division: 40 u of the value,
 //    u the fragment shader's unit roundoff.
 // The output's own storage rounding is left to the caller (it depends on the
 // output scale, which blending changes).
@@ -142,15 +149,15 @@ inline CosineReference cosineIrradianceReference(const ibl::CubeMapRGB& radiance
   ref.rgb = ibl::irradianceOverPiByCosinePasses(radiance, cosine, &validity);
   const ibl::CubeMapRGB coverage = ibl::irradianceOverPiByCosinePasses(valid, cosine);  // L(V) / L(1), L(1) = 1
 
-  // L' (east + pole taps on a prefiltered-size map) and the north pass alone.
+  // L' (everything after the prefilter, on a prefiltered-size map), and the
+  // parts after the east and the north latitude-longitude maps.
   const auto after_prefilter = [&](const ibl::CubeMapRGB& m) {
     return ibl::irradianceOverPiByCosinePasses(detail::upsample(m, factor), cosine);
   };
-  const ibl::SphericalBlurPass east{ibl::BlurAxis::kEast, 0.0, cosine.half_taps, ibl::BlurKernel::kCosineSquared};
-  const ibl::SphericalBlurPass north{ibl::BlurAxis::kNorth, 0.0, cosine.half_taps, ibl::BlurKernel::kCosine};
-  const auto north_pass = [&](const ibl::CubeMapRGB& m) {
-    return ibl::sphericalBlurPass(m, cosine.output_face_size, north);
+  const auto after_east = [&](const ibl::LatLongRGB& m) {
+    return ibl::latLongToCube(ibl::northPassOnLatLong(m), cosine.output_face_size);
   };
+  const auto after_north = [&](const ibl::LatLongRGB& m) { return ibl::latLongToCube(m, cosine.output_face_size); };
 
   const double delta = detail::prefilterWeightDelta(radiance.face_size, factor);
   const double direction_error_rad = 1e-5;
@@ -159,8 +166,10 @@ inline CosineReference cosineIrradianceReference(const ibl::CubeMapRGB& radiance
 
   const ibl::CubeMapRGB pre_p = ibl::downsampleCubeMap(premultiplied, factor);
   const ibl::CubeMapRGB pre_a = ibl::downsampleCubeMap(valid, factor);
-  const ibl::CubeMapRGB int_p = ibl::sphericalBlurPass(pre_p, cosine.intermediate_face_size, east);
-  const ibl::CubeMapRGB int_a = ibl::sphericalBlurPass(pre_a, cosine.intermediate_face_size, east);
+  const ibl::LatLongRGB east_p = ibl::eastPassToLatLong(pre_p, cosine.intermediate_rows, cosine.half_taps);
+  const ibl::LatLongRGB east_a = ibl::eastPassToLatLong(pre_a, cosine.intermediate_rows, cosine.half_taps);
+  const ibl::LatLongRGB north_p = ibl::northPassOnLatLong(east_p);
+  const ibl::LatLongRGB north_a = ibl::northPassOnLatLong(east_a);
 
   // Errors entering at the prefiltered map (storage, weights, fp32 taps on it).
   const auto pre_error = [&](const ibl::CubeMapRGB& pre, const ibl::CubeMapRGB& source, bool alpha) {
@@ -175,20 +184,48 @@ inline CosineReference cosineIrradianceReference(const ibl::CubeMapRGB& radiance
       return e;
     });
   };
-  const auto int_error = [&](const ibl::CubeMapRGB& inter, bool alpha) {
-    const ibl::CubeMapRGB dilated = detail::dilatedSpread(inter);
-    const double sample_shift_texels = direction_error_rad * inter.face_size;
-    return mapTexels(inter, [&](int face, int x, int y) {
-      glm::vec3 e = static_cast<float>(sample_shift_texels) * dilated.texel(face, x, y);
-      for (int c = 0; c < 3; ++c)
-        e[c] += static_cast<float>(alpha ? alpha_rounding : storageRoundingBound(storage, inter.texel(face, x, y)[c], scale, rgb_levels));
-      return e;
-    });
+  // Errors entering at a latitude-longitude map: its storage, and (for the
+  // north map, which the resampling looks up bilinearly) the lookup's shift.
+  double min_sin_theta = 1.0;
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face)
+    for (int y = 0; y < cosine.output_face_size; ++y)
+      for (int x = 0; x < cosine.output_face_size; ++x)
+        min_sin_theta = std::min(min_sin_theta, std::sin(ibl::colatitudeRad(ibl::cubeTexelCenterDirection(
+                                                    face, x, y, cosine.output_face_size))));
+  const auto latlong_error = [&](const ibl::LatLongRGB& map, bool alpha, double sample_shift_texels) {
+    ibl::LatLongRGB e(map.width, map.height);
+    for (int y = 0; y < map.height; ++y) {
+      for (int x = 0; x < map.width; ++x) {
+        glm::vec3 lo(1e30f), hi(-1e30f);
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const glm::vec3& t = map.texel((x + dx + map.width) % map.width, std::clamp(y + dy, 0, map.height - 1));
+            lo = glm::min(lo, t);
+            hi = glm::max(hi, t);
+          }
+        glm::vec3 bound = static_cast<float>(sample_shift_texels) * (hi - lo);
+        for (int c = 0; c < 3; ++c)
+          bound[c] += static_cast<float>(alpha ? alpha_rounding
+                                               : storageRoundingBound(storage, map.texel(x, y)[c], scale, rgb_levels));
+        e.texel(x, y) = bound;
+      }
+    }
+    return e;
   };
+  const double north_shift_texels =
+      direction_error_rad * std::max(cosine.intermediate_rows / M_PI, 2.0 * cosine.intermediate_rows /
+                                                                          (2.0 * M_PI * min_sin_theta));
+  ibl::CubeMapRGB e_p2 = after_east(latlong_error(east_p, false, 0.0));
+  ibl::CubeMapRGB e_a2 = after_east(latlong_error(east_a, true, 0.0));
+  const ibl::CubeMapRGB e_p3 = after_north(latlong_error(north_p, false, north_shift_texels));
+  const ibl::CubeMapRGB e_a3 = after_north(latlong_error(north_a, true, north_shift_texels));
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face)
+    for (size_t i = 0; i < e_p2.faces[face].size(); ++i) {
+      e_p2.faces[face][i] += e_p3.faces[face][i];
+      e_a2.faces[face][i] += e_a3.faces[face][i];
+    }
   const ibl::CubeMapRGB e_p1 = after_prefilter(pre_error(pre_p, premultiplied, false));
-  const ibl::CubeMapRGB e_p2 = north_pass(int_error(int_p, false));
   const ibl::CubeMapRGB e_a1 = after_prefilter(pre_error(pre_a, valid, true));
-  const ibl::CubeMapRGB e_a2 = north_pass(int_error(int_a, true));
   ibl::CubeMapRGB e_in(cosine.output_face_size);
   if (input_levels > 0.0) {
     const ibl::CubeMapRGB rounding = mapTexels(radiance, [&](int face, int x, int y) {

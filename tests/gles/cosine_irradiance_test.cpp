@@ -1,5 +1,6 @@
-// Stage 3 on the GPU (EnvironmentMaps::updateDiffuse: prefilter, east cos^2,
-// north cos with the pole correction, normalised convolution of validity)
+// Stage 3 on the GPU (EnvironmentMaps::updateDiffuse: prefilter, east cos^2
+// and north cos on latitude-longitude maps, resampling to the cube,
+// normalised convolution of validity)
 // against ibl::irradianceOverPiByCosinePasses, for both cube storages. The
 // tolerance is derived in cosine_irradiance_reference.hpp.
 #include <algorithm>
@@ -22,8 +23,9 @@ namespace {
 
 using test::GpuTest;
 
-// A small lamp 6.4 deg from the zenith, so the north pass's pole correction
-// carries it, and a 0.4-rad blind spot below the horizon (rgb 0, validity 0).
+// A small lamp 6.4 deg from the zenith, so the north pass carries it over the
+// pole of the latitude-longitude maps, and a 0.4-rad blind spot below the
+// horizon (rgb 0, validity 0).
 const glm::dvec3 kZenithLamp = glm::normalize(glm::dvec3(0.1, 0.05, 1.0));
 constexpr double kZenithLampRadiusRad = 6.0 * M_PI / 180.0;
 const glm::dvec3 kBlindSpot = glm::normalize(glm::dvec3(0.2, -0.9, -0.4));
@@ -159,21 +161,19 @@ TEST_P(CosineIrradianceTest, MatchesCpuReferenceWithZenithLampAndBlindSpot) {
   EXPECT_LE(result->max_alpha_excess, 0.0);
 }
 
-// The tolerance is tight enough to see the pole correction: the same GPU
-// maps made without it (pole_direct_deg 0: no tap is that close to +-Z)
-// must fail the comparison with the reference that has it. Half floats
-// only: in RGBA8 at the lamp's scale the worst-case storage bound (three
-// stored maps, ~2.3% each for the sky at scale 10.6) exceeds the 6.5% the
-// correction is worth there (measured), so only the half-float path can
-// show it.
-TEST_F(GpuTest, WithoutThePoleCorrectionTheComparisonFails) {
+// The tolerance is tight enough to see a coarser east-pass map: the same GPU
+// maps made with 16 rows instead of 32 must fail the comparison with the
+// reference for 32. Half floats only: in RGBA8 at the lamp's scale the
+// worst-case storage bound (four stored maps, ~2.3% each for the sky at
+// scale 10.6) is larger than what the rows change there.
+TEST_F(GpuTest, ACoarserLatitudeLongitudeMapFailsTheComparison) {
   std::string error;
-  passes::EnvironmentMapSettings without;
-  without.pole_direct_deg = 0.0;
-  const auto result = runComparison(false, lampGain(false), without, passes::EnvironmentMapSettings{}, error);
+  passes::EnvironmentMapSettings coarser;
+  coarser.intermediate_rows = 16;
+  const auto result = runComparison(false, lampGain(false), coarser, passes::EnvironmentMapSettings{}, error);
   if (!result && error.rfind("skip: ", 0) == 0) GTEST_SKIP() << error;
   ASSERT_TRUE(result) << error;
-  std::printf("[ measure  ] without the pole correction, %s: max relative %.2f%%, excess over the tolerance %.2e\n",
+  std::printf("[ measure  ] 16 rows against the reference for 32, %s: max relative %.2f%%, excess over the tolerance %.2e\n",
               result->description.c_str(), 100.0 * result->max_relative, result->max_excess);
   EXPECT_GT(result->max_excess, 0.0);
 }
@@ -213,9 +213,9 @@ TEST_F(GpuTest, CosineIrradianceSettingsAreChecked) {
   EXPECT_FALSE(maps.init(test::sharedCapabilities(), settings, error));
   EXPECT_NE(error.find("prefilter_face_size"), std::string::npos) << error;
   settings = {};
-  settings.pole_direct_deg = 120.0;
+  settings.intermediate_rows = 31;  // the north pass's taps need an even count
   EXPECT_FALSE(maps.init(test::sharedCapabilities(), settings, error));
-  EXPECT_NE(error.find("pole_direct_deg"), std::string::npos) << error;
+  EXPECT_NE(error.find("intermediate_rows"), std::string::npos) << error;
 }
 
 }  // namespace
