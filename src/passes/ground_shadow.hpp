@@ -33,7 +33,7 @@ struct GroundShadowSettings {
   int shadow_map_size_px = 256;       // the object's bounding sphere fills it: 0.3 mm texels for a 7 cm sphere
   int ground_texture_size_px = 256;   // over the square the shadows reach
   double max_region_half_size_m = 0.5;  // lights near the horizon cast shadows this far at most
-  int region_mesh_segments = 32;      // the square's grid for the lens distortion in the composite
+  int region_mesh_segments = 16;      // the square's grid for the lens distortion in the composite
   bool force_packed_depth = false;    // use the RGBA8 path even with OES_depth_texture (tests, comparison)
   ibl::CameraTransfer camera_transfer;  // how the camera's bytes decode to light
 };

@@ -1,6 +1,9 @@
 #include "passes/object_compositor.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -9,12 +12,23 @@
 
 namespace probelight::passes {
 
+int sphereSegmentsFor(double radius_px, double max_sag_px) {
+  for (int segments : kSphereSegmentSteps)
+    if (radius_px * (1.0 - std::cos(glm::pi<double>() / segments)) <= max_sag_px) return segments;
+  return kSphereSegmentSteps[std::size(kSphereSegmentSteps) - 1];
+}
+
+double sphereSilhouetteRadiusBoundPx(double focal_px, double radius_m, double depth_m) {
+  if (!(depth_m > radius_m)) return std::numeric_limits<double>::infinity();
+  return focal_px * radius_m / (depth_m - radius_m);
+}
+
 bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const ObjectCompositorSettings& settings,
                             CubeStorage storage, std::string& error) {
   settings_ = settings;
   storage_ = storage;
-  if (settings.sphere_longitude_segments < 3 || settings.sphere_latitude_segments < 2) {
-    error = "ObjectCompositor: the sphere needs at least 3 longitude and 2 latitude segments";
+  if (!(settings.max_silhouette_sag_px > 0.0)) {
+    error = "ObjectCompositor: max_silhouette_sag_px must be > 0";
     return false;
   }
   if (!(settings.near_m > 0.0 && settings.far_m > settings.near_m)) {
@@ -33,45 +47,47 @@ bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const Ob
   if (!mesh_program) return false;
   mesh_program_ = std::move(*mesh_program);
 
-  // Unit sphere, latitude rings from the south pole to the north pole.
-  const int columns = settings.sphere_longitude_segments;
-  const int rows = settings.sphere_latitude_segments;
-  std::vector<GLfloat> vertices;
-  vertices.reserve(static_cast<size_t>((columns + 1) * (rows + 1) * 3));
-  for (int row = 0; row <= rows; ++row) {
-    const double polar = glm::pi<double>() * row / rows;
-    for (int column = 0; column <= columns; ++column) {
-      const double azimuth = 2.0 * glm::pi<double>() * column / columns;
-      vertices.push_back(static_cast<GLfloat>(std::sin(polar) * std::cos(azimuth)));
-      vertices.push_back(static_cast<GLfloat>(std::sin(polar) * std::sin(azimuth)));
-      vertices.push_back(static_cast<GLfloat>(-std::cos(polar)));
+  sphere_meshes_.clear();
+  for (int segments : kSphereSegmentSteps) {
+    // Unit sphere, latitude rings from the south pole to the north pole.
+    const int columns = segments;
+    const int rows = segments / 2;
+    std::vector<GLfloat> vertices;
+    vertices.reserve(static_cast<size_t>((columns + 1) * (rows + 1) * 3));
+    for (int row = 0; row <= rows; ++row) {
+      const double polar = glm::pi<double>() * row / rows;
+      for (int column = 0; column <= columns; ++column) {
+        const double azimuth = 2.0 * glm::pi<double>() * column / columns;
+        vertices.push_back(static_cast<GLfloat>(std::sin(polar) * std::cos(azimuth)));
+        vertices.push_back(static_cast<GLfloat>(std::sin(polar) * std::sin(azimuth)));
+        vertices.push_back(static_cast<GLfloat>(-std::cos(polar)));
+      }
     }
-  }
-  // GLES2 core has only 16-bit indices.
-  if ((columns + 1) * (rows + 1) > 65535) {
-    error = "ObjectCompositor: sphere tessellation exceeds 65535 vertices (16-bit indices)";
-    return false;
-  }
-  std::vector<GLushort> indices;
-  for (int row = 0; row < rows; ++row) {
-    for (int column = 0; column < columns; ++column) {
-      const auto a = static_cast<GLushort>(row * (columns + 1) + column);
-      const auto b = static_cast<GLushort>(a + 1);
-      const auto c = static_cast<GLushort>(a + columns + 1);
-      const auto d = static_cast<GLushort>(c + 1);
-      indices.insert(indices.end(), {a, b, d, a, d, c});
+    // GLES2 core has only 16-bit indices (the largest step has 8,385 vertices).
+    std::vector<GLushort> indices;
+    for (int row = 0; row < rows; ++row) {
+      for (int column = 0; column < columns; ++column) {
+        const auto a = static_cast<GLushort>(row * (columns + 1) + column);
+        const auto b = static_cast<GLushort>(a + 1);
+        const auto c = static_cast<GLushort>(a + columns + 1);
+        const auto d = static_cast<GLushort>(c + 1);
+        indices.insert(indices.end(), {a, b, d, a, d, c});  // counter-clockwise seen from outside
+      }
     }
+    SphereMesh mesh;
+    mesh.segments = segments;
+    mesh.index_count = static_cast<GLsizei>(indices.size());
+    mesh.vertices = gles::Buffer::create();
+    glBindBuffer(GL_ARRAY_BUFFER, mesh.vertices.id());
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GLfloat)), vertices.data(),
+                 GL_STATIC_DRAW);
+    mesh.indices = gles::Buffer::create();
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh.indices.id());
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLushort)),
+                 indices.data(), GL_STATIC_DRAW);
+    sphere_meshes_.push_back(std::move(mesh));
   }
-  sphere_index_count_ = static_cast<GLsizei>(indices.size());
-  sphere_vertices_ = gles::Buffer::create();
-  glBindBuffer(GL_ARRAY_BUFFER, sphere_vertices_.id());
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GLfloat)), vertices.data(),
-               GL_STATIC_DRAW);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
-  sphere_indices_ = gles::Buffer::create();
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, sphere_indices_.id());
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLushort)), indices.data(),
-               GL_STATIC_DRAW);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
   overlay_ = gles::Texture();
   return gles::checkGl("ObjectCompositor::init", error);
@@ -163,9 +179,16 @@ bool ObjectCompositor::prepareShading(const gles::Program& program, const Camera
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
   glDisable(GL_BLEND);
-  // The image's y-down flip mirrors winding, so back-face culling is left off:
-  // a closed object is depth-tested correctly either way.
-  glDisable(GL_CULL_FACE);
+  // Back faces culled: half the fragments of a closed object, which the depth
+  // test would otherwise shade and then overwrite (or reject) after the
+  // fact. Triangles are counter-clockwise seen from outside (the sphere's
+  // rings and boxMesh's faces); the camera frame (x right, y down, z ahead)
+  // is right-handed and its y is flipped into NDC, so a face toward the
+  // camera is counter-clockwise in window coordinates too: GL's default
+  // front face.
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glFrontFace(GL_CCW);
   return true;
 }
 
@@ -183,15 +206,23 @@ bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const Po
     error = "ObjectCompositor: sphere_object.vert has no attribute a_unit";
     return false;
   }
-  glBindBuffer(GL_ARRAY_BUFFER, sphere_vertices_.id());
+  const double depth_m = pose.toCamera(centre_w).z;
+  const int segments = sphereSegmentsFor(
+      sphereSilhouetteRadiusBoundPx(std::max(camera.fx_px, camera.fy_px), radius_m, depth_m),
+      settings_.max_silhouette_sag_px);
+  const SphereMesh* mesh = &sphere_meshes_.back();
+  for (const SphereMesh& candidate : sphere_meshes_)
+    if (candidate.segments == segments) mesh = &candidate;
+  glBindBuffer(GL_ARRAY_BUFFER, mesh->vertices.id());
   glEnableVertexAttribArray(static_cast<GLuint>(unit));
   glVertexAttribPointer(static_cast<GLuint>(unit), 3, GL_FLOAT, GL_FALSE, 0, nullptr);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, sphere_indices_.id());
-  glDrawElements(GL_TRIANGLES, sphere_index_count_, GL_UNSIGNED_SHORT, nullptr);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh->indices.id());
+  glDrawElements(GL_TRIANGLES, mesh->index_count, GL_UNSIGNED_SHORT, nullptr);
   glDisableVertexAttribArray(static_cast<GLuint>(unit));
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glDisable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
   return gles::checkGl("ObjectCompositor::drawSphereObject", error);
 }
 
@@ -221,6 +252,7 @@ bool ObjectCompositor::drawMeshObject(const CameraIntrinsics& camera, const Pose
   glDisableVertexAttribArray(static_cast<GLuint>(normal));
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glDisable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
   return gles::checkGl("ObjectCompositor::drawMeshObject", error);
 }
 

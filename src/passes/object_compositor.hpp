@@ -23,11 +23,14 @@
 namespace probelight::passes {
 
 struct ObjectCompositorSettings {
-  // 64 x 32 facets: the chord of a 100 px-radius silhouette sags by
-  // 100 * (1 - cos(pi / 64)) = 0.12 px, and facet normals are off by at most
-  // ~(pi / 64)^2 / 8 * tan(view angle) rad.
-  int sphere_longitude_segments = 64;
-  int sphere_latitude_segments = 32;
+  // The sphere is tessellated for its size on screen (sphereSegmentsFor):
+  // N longitude x N / 2 latitude facets, the fewest of kSphereSegmentSteps
+  // whose chords sag by at most this much off the true silhouette (a
+  // 100 px-radius sphere gets 48 x 24: 100 (1 - cos(pi / 48)) = 0.21 px).
+  // Shading uses the interpolated, renormalised sphere normal, so only the
+  // outline depends on it. Small triangles are what llvmpipe (and tiled
+  // GPUs) pay for per triangle; 4,096 one-pixel ones were half of `render`.
+  double max_silhouette_sag_px = 0.25;
   double near_m = 0.01;
   double far_m = 50.0;
 };
@@ -77,13 +80,31 @@ class ObjectCompositor {
   gles::Program mesh_program_;
   gles::Buffer mesh_vertices_;
   gles::FullScreenQuad quad_;
-  gles::Buffer sphere_vertices_;
-  gles::Buffer sphere_indices_;
-  GLsizei sphere_index_count_ = 0;
+  struct SphereMesh {
+    int segments = 0;  // longitude; latitude is half
+    gles::Buffer vertices;
+    gles::Buffer indices;
+    GLsizei index_count = 0;
+  };
+  std::vector<SphereMesh> sphere_meshes_;  // one per kSphereSegmentSteps
   gles::Texture overlay_;
   int overlay_width_ = 0;
   int overlay_height_ = 0;
 };
+
+// Longitude segment counts the sphere is built with (latitude: half).
+inline constexpr int kSphereSegmentSteps[] = {8, 12, 16, 24, 32, 48, 64, 96, 128};
+
+// The fewest of kSphereSegmentSteps whose chord, on a silhouette of
+// radius_px, sags by at most max_sag_px: radius_px (1 - cos(pi / N)); the
+// most when none does (or the radius is not finite).
+int sphereSegmentsFor(double radius_px, double max_sag_px);
+
+// Upper bound of the silhouette radius in pixels of a sphere of radius_m
+// whose centre is depth_m ahead of the camera: focal_px * radius_m /
+// (depth_m - radius_m) (the cone's tangent, above the distortion-free
+// projection's half width); infinity when the camera is within a radius.
+double sphereSilhouetteRadiusBoundPx(double focal_px, double radius_m, double depth_m);
 
 // A box standing on the ground (ibl::ShadowCaster of Shape::kBox) as 12
 // flat-shaded triangles with outward normals.

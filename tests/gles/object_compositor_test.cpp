@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -222,6 +224,32 @@ TEST_F(GpuTest, SphereSilhouetteLandsOnTheDistortedProjection) {
   EXPECT_NEAR(covered, std::abs(area_px), 0.3 * perimeter_px);
 }
 
+// The tessellation follows the sphere's size on screen: the fewest facets
+// whose chords stay within the sag, and a radius bound that is never below
+// the true silhouette's (f R / sqrt(d^2 - R^2) on the axis).
+TEST(SphereTessellation, FewestSegmentsWithinTheSagForABoundOnTheRadius) {
+  const double sag_px = passes::ObjectCompositorSettings{}.max_silhouette_sag_px;
+  const auto sag = [](double radius_px, int segments) { return radius_px * (1.0 - std::cos(glm::pi<double>() / segments)); };
+  int previous = 0;
+  for (double radius_px : {2.0, 10.0, 40.0, 56.0, 100.0, 250.0, 600.0}) {
+    const int segments = passes::sphereSegmentsFor(radius_px, sag_px);
+    EXPECT_LE(sag(radius_px, segments), sag_px) << radius_px;
+    EXPECT_GE(segments, previous) << radius_px;  // never fewer for a larger sphere
+    previous = segments;
+    const auto step = std::find(std::begin(passes::kSphereSegmentSteps), std::end(passes::kSphereSegmentSteps), segments);
+    ASSERT_NE(step, std::end(passes::kSphereSegmentSteps));
+    if (step != std::begin(passes::kSphereSegmentSteps)) EXPECT_GT(sag(radius_px, *(step - 1)), sag_px) << radius_px;
+  }
+  // Too large for any step (or not finite): the finest.
+  EXPECT_EQ(passes::sphereSegmentsFor(1e6, sag_px), 128);
+  EXPECT_EQ(passes::sphereSegmentsFor(std::numeric_limits<double>::infinity(), sag_px), 128);
+  for (double depth_m : {0.11, 0.3, 1.0, 5.0}) {
+    const double exact = 600.0 * 0.1 / std::sqrt(depth_m * depth_m - 0.01);
+    EXPECT_GE(passes::sphereSilhouetteRadiusBoundPx(600.0, 0.1, depth_m), exact) << depth_m;
+  }
+  EXPECT_TRUE(std::isinf(passes::sphereSilhouetteRadiusBoundPx(600.0, 0.1, 0.05)));  // camera inside the sphere
+}
+
 class SphereShadingTest : public GpuTest, public ::testing::WithParamInterface<bool> {};
 
 // Each covered pixel away from the silhouette against ibl::shadeSurface at
@@ -230,10 +258,12 @@ class SphereShadingTest : public GpuTest, public ::testing::WithParamInterface<b
 // output levels. Budget per pixel:
 //  - output rounding: 0.5 level; map storage is shared (read back), so none;
 //  - facet normals: the flat facet lies below the sphere by the sagitta
-//    (pi/64)^2 / 8 radius, which tilts the shading normal by up to
-//    sagitta * tan(view angle) / radius = 1.2e-3 * tan(60 deg) = 2.1e-3 rad;
-//    the tolerance adds the change of the CPU shading when its normal is
-//    tilted by 2.5e-3 rad (worst of four tilts), so sharp highlights and map
+//    (pi / rows)^2 / 8 radius (rows: the latitude segments the compositor
+//    picks for this sphere's size, sphereSegmentsFor), which tilts the
+//    shading normal by up to sagitta * tan(view angle) / radius, view angle
+//    <= 60 deg away from the silhouette band; the tolerance adds the change
+//    of the CPU shading when its normal is tilted by that (worst of four
+//    tilts, at least 2.5e-3 rad), so sharp highlights and map
 //    edges get the slack they need and flat regions do not;
 //  - fp32 shading and llvmpipe's approximate pow: < 0.5 level.
 TEST_P(SphereShadingTest, MatchesCpuShadeSurface) {
@@ -298,6 +328,14 @@ TEST_P(SphereShadingTest, MatchesCpuShadeSurface) {
 
   const glm::dvec3 eye = scene.pose.cameraCenterWorld();
   const glm::dmat3 world_from_cam = glm::transpose(scene.pose.R_cam_from_world);
+  const int latitude_rows =
+      passes::sphereSegmentsFor(passes::sphereSilhouetteRadiusBoundPx(std::max(scene.camera.fx_px, scene.camera.fy_px),
+                                                                      scene.radius_m,
+                                                                      scene.pose.toCamera(scene.centre_w).z),
+                                passes::ObjectCompositorSettings{}.max_silhouette_sag_px) /
+      2;
+  const float tilt_rad = std::max(
+      2.5e-3f, static_cast<float>(std::pow(glm::pi<double>() / latitude_rows, 2.0) / 8.0 * std::tan(glm::radians(60.0))));
   auto shade_levels = [&](const glm::vec3& normal, const glm::vec3& to_eye) {
     const glm::vec3 linear = ibl::shadeSurface(normal, to_eye, *diffuse, *reflection, glossy, material, lighting);
     return glm::dvec3(ibl::linearToSrgb(linear.r), ibl::linearToSrgb(linear.g), ibl::linearToSrgb(linear.b)) * 255.0;
@@ -323,7 +361,7 @@ TEST_P(SphereShadingTest, MatchesCpuShadeSurface) {
       const glm::vec3 tangent_b = glm::cross(n, tangent_a);
       glm::dvec3 sensitivity(0.0);
       for (const glm::vec3& tilt : {tangent_a, -tangent_a, tangent_b, -tangent_b}) {
-        sensitivity = glm::max(sensitivity, glm::abs(shade_levels(glm::normalize(n + 2.5e-3f * tilt), to_eye) - expected));
+        sensitivity = glm::max(sensitivity, glm::abs(shade_levels(glm::normalize(n + tilt_rad * tilt), to_eye) - expected));
       }
       for (int c = 0; c < 3; ++c) {
         const double gpu = result.row(y)[3 * x + c];
