@@ -99,6 +99,7 @@ class Kiosk {
     const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
     source_->stop();
     PROBELIGHT_TRY(status);
+    if (std::string error; !display_->finish(error)) return Status::runtimeFailure(error);
     PROBELIGHT_TRY(writeReport(elapsed_s));
     return writeCapture();
   }

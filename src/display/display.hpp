@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/types.hpp"
+#include "display/image_write_queue.hpp"
 
 namespace probelight {
 
@@ -33,11 +34,20 @@ class Display {
   // Keep the next presented frame whatever else the display keeps (the last
   // frame of a run, say); a display that keeps no frames ignores it.
   virtual void keepNextFrame() {}
+  // Waits for the work present() left running (frames still being written).
+  // False with a one-line reason when some of it failed.
+  virtual bool finish(std::string& error) {
+    (void)error;
+    return true;
+  }
 };
 
 // EGL without a display server (Mesa surfaceless); each presented frame is
 // read back and written as DIR/frame_NNNNNN.png when its number is a multiple
 // of save_every (0: never), and always when present() is asked to keep it.
+// The PNGs are encoded and written on a thread of their own
+// (ImageWriteQueue): a failed write is reported by a later present() or by
+// finish().
 class HeadlessDisplay final : public Display {
  public:
   HeadlessDisplay(std::filesystem::path out_dir, int save_every);
@@ -54,17 +64,18 @@ class HeadlessDisplay final : public Display {
   // The last frame read back (empty if none was kept yet).
   const ImageRGB8& lastKeptFrame() const { return last_kept_; }
   const std::filesystem::path& lastKeptPath() const { return last_kept_path_; }
-  int framesWritten() const { return frames_written_; }
+  int framesWritten() const { return writer_ ? writer_->written() : 0; }
+  bool finish(std::string& error) override;
 
  private:
   std::filesystem::path out_dir_;
   int save_every_;
   bool keep_next_ = false;
-  int frames_written_ = 0;
   std::unique_ptr<gles::EglContext> context_;
   std::unique_ptr<gles::RenderTarget> target_;
   ImageRGB8 last_kept_;
   std::filesystem::path last_kept_path_;
+  std::unique_ptr<ImageWriteQueue> writer_;
 };
 
 struct KmsDisplaySettings;

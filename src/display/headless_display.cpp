@@ -16,6 +16,7 @@ HeadlessDisplay::HeadlessDisplay(std::filesystem::path out_dir, int save_every)
     : out_dir_(std::move(out_dir)), save_every_(save_every) {}
 
 HeadlessDisplay::~HeadlessDisplay() {
+  writer_.reset();  // the frames still queued are written
   target_.reset();  // GL objects go before their context
   context_.reset();
 }
@@ -36,6 +37,10 @@ bool HeadlessDisplay::open(int width_px, int height_px, std::string& error) {
       return false;
     }
   }
+  // Compression level 1: PNG encoding would otherwise cost more than a frame.
+  writer_ = std::make_unique<ImageWriteQueue>([](const std::string& path, const ImageRGB8& image) {
+    return writeRgbImage(path, image, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  });
   return true;
 }
 
@@ -52,13 +57,17 @@ bool HeadlessDisplay::present(std::uint64_t frame_number, std::string& error) {
   char name[32];
   std::snprintf(name, sizeof name, "frame_%06llu.png", static_cast<unsigned long long>(frame_number));
   last_kept_path_ = out_dir_ / name;
-  // Compression level 1: PNG encoding would otherwise cost more than a frame.
-  if (!writeRgbImage(last_kept_path_.string(), last_kept_, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
-    error = "headless display: cannot write " + last_kept_path_.string();
+  if (!writer_->push(last_kept_path_.string(), last_kept_, error)) {
+    error = "headless display: " + error;
     return false;
   }
-  ++frames_written_;
   return true;
+}
+
+bool HeadlessDisplay::finish(std::string& error) {
+  if (!writer_ || writer_->finish(error)) return true;
+  error = "headless display: " + error;
+  return false;
 }
 
 std::string HeadlessDisplay::describe() const {
