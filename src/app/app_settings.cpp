@@ -122,6 +122,8 @@ AppSettings loadAppSettings(const std::string& path) {
                                                               : ibl::DomePlacement::kClustered;
   light_settings.fade_s = lights.readDouble("fade_s", light_settings.fade_s, Range::closed(0.0, 60.0));
   light_settings.shadows = lights.readBool("shadows", light_settings.shadows);
+  light_settings.shadows_every_frame =
+      lights.readString("shadow_updates", "on_change", {"on_change", "every_frame"}) == "every_frame";
   light_settings.shadow_map_size_px =
       lights.readInt("shadow_map_size", light_settings.shadow_map_size_px, Range::closed(16, 4096));
   light_settings.ground_texture_size_px =

@@ -205,6 +205,7 @@ class Kiosk {
       if (frameLimit() != 0 && frames_done_ == frameLimit()) display_->keepNextFrame();
       std::string error;
       if (!display_->present(frame_number, error)) return Status::runtimeFailure(error);
+      report_.recordFrameShown(monotonicNowS());
     }
     // systemd: ready once the first frame is shown, then the watchdog from
     // here, so a hung camera or GPU stops the pings.

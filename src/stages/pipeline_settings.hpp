@@ -54,6 +54,9 @@ struct LightsConfig {
   ibl::LightDomeSettings dome;  // count 8, clustered placement
   double fade_s = 0.5;          // new lights move and fade in over this long
   bool shadows = true;
+  // Shadow maps are remade only when the lights change (fading after a fit);
+  // true remakes them every frame: the worst case, for benchmarks.
+  bool shadows_every_frame = false;
   int shadow_map_size_px = 256;
   int ground_texture_size_px = 256;
   double max_shadow_reach_m = 0.5;  // from the object, for lights near the horizon

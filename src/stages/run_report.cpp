@@ -48,6 +48,13 @@ nlohmann::json RunReport::toJson(long long frames, double elapsed_s) const {
   out["frames"] = frames;
   out["fps"] = finiteOrNull(elapsed_s > 0.0 ? static_cast<double>(frames) / elapsed_s : 0.0);
   out["elapsed_s"] = finiteOrNull(elapsed_s);
+  // The median interval between shown frames, and the rate it gives: what
+  // the pipeline sustains once running.
+  if (!frame_interval_ms_.empty()) {
+    out["frame_interval_ms"] = {{"median", finiteOrNull(frame_interval_ms_.median())},
+                                {"p95", finiteOrNull(frame_interval_ms_.percentile(95.0))}};
+    out["fps_steady"] = finiteOrNull(frame_interval_ms_.median() > 0.0 ? 1e3 / frame_interval_ms_.median() : 0.0);
+  }
 
   nlohmann::json stages = nlohmann::json::object();
   std::map<std::string, bool> names;

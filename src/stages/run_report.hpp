@@ -57,6 +57,13 @@ class RunReport {
   void recordStageSkip(const std::string& stage, const std::string& reason);
   void recordAccuracy(const std::string& measure, double value) { accuracy_[measure].add(value); }
   void count(const std::string& counter, long long by = 1) { counters_[counter] += by; }
+  // A frame was shown at `now_s` (monotonic): the interval since the last
+  // one is kept, so the report's steady frame rate is not dragged down by
+  // start-up (the first fit, the first shadow maps) as frames / elapsed is.
+  void recordFrameShown(double now_s) {
+    if (last_frame_shown_s_ >= 0.0) frame_interval_ms_.add(1e3 * (now_s - last_frame_shown_s_));
+    last_frame_shown_s_ = now_s;
+  }
 
   const SampleSeries* stage(const std::string& name) const;
   const SampleSeries* accuracy(const std::string& name) const;
@@ -73,6 +80,8 @@ class RunReport {
   std::map<std::string, std::map<std::string, int>> stage_skip_reasons_;
   std::map<std::string, SampleSeries> accuracy_;
   std::map<std::string, long long> counters_;
+  SampleSeries frame_interval_ms_;
+  double last_frame_shown_s_ = -1.0;
 };
 
 // Times a scope and records it under `stage` when it ends.

@@ -30,7 +30,7 @@ Status ShadowsStage::run(std::uint64_t frame_number, const std::vector<ibl::Dome
                                });
   // Lights below the horizon or too faint never get a pass.
   report_.count("shadow_lights_too_faint", std::max(0, static_cast<int>(dome_size) - static_cast<int>(lights.size())));
-  if (same) {
+  if (same && !settings_.lights.shadows_every_frame) {
     report_.count("shadow_passes_skipped", static_cast<long long>(lights.size()));
     return Status::ok();
   }

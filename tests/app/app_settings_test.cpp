@@ -58,6 +58,7 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.lights.dome.placement, defaults.lights.dome.placement);
   EXPECT_DOUBLE_EQ(from_file.lights.fade_s, defaults.lights.fade_s);
   EXPECT_EQ(from_file.lights.shadows, defaults.lights.shadows);
+  EXPECT_EQ(from_file.lights.shadows_every_frame, defaults.lights.shadows_every_frame);
   EXPECT_EQ(from_file.lights.shadow_map_size_px, defaults.lights.shadow_map_size_px);
   EXPECT_EQ(from_file.lights.ground_texture_size_px, defaults.lights.ground_texture_size_px);
   EXPECT_DOUBLE_EQ(from_file.lights.max_shadow_reach_m, defaults.lights.max_shadow_reach_m);
