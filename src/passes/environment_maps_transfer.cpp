@@ -136,7 +136,15 @@ std::optional<ibl::CubeMapRGB> EnvironmentMaps::readCube(const GpuCubeMap& map, 
       if (read_format == GL_RGBA && (read_type == GL_HALF_FLOAT_OES || read_type == 0x140B /* GL_HALF_FLOAT */)) {
         std::vector<std::uint16_t> halves(texel_count * 4u);
         glReadPixels(0, 0, n, n, GL_RGBA, static_cast<GLenum>(read_type), halves.data());
-        for (size_t i = 0; i < halves.size(); ++i) rgba[i] = halfToFloat(halves[i]);
+        // Every 16-bit pattern decoded once: a read-back follows each map
+        // update while clipped lights are followed, and ldexp per channel
+        // cost more than the read itself.
+        static const std::vector<float> kHalfToFloat = [] {
+          std::vector<float> table(65536);
+          for (std::uint32_t h = 0; h < table.size(); ++h) table[h] = halfToFloat(static_cast<std::uint16_t>(h));
+          return table;
+        }();
+        for (size_t i = 0; i < halves.size(); ++i) rgba[i] = kHalfToFloat[halves[i]];
       } else {
         glReadPixels(0, 0, n, n, GL_RGBA, GL_FLOAT, rgba.data());
       }
