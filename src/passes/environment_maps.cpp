@@ -411,9 +411,14 @@ bool EnvironmentMaps::updateDiffuse(std::string& error, float new_weight) {
   if (!latLongPass(east_program_, east_latlong_, prefiltered_.linear_scale, input_scale, "EnvironmentMaps east pass",
                    error))
     return false;
+  // The latitude-longitude maps are 2D textures: on units of their own, so
+  // that no unit is asked for a cube and a 2D sampler at once (GLES2 refuses
+  // a draw where two active samplers of different types share a unit).
   north_program_.use();
+  glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, east_latlong_.texture.id());
-  glUniform1i(north_program_.uniform("u_latlong"), 0);
+  glUniform1i(north_program_.uniform("u_latlong"), 1);
+  glActiveTexture(GL_TEXTURE0);
   if (!latLongPass(north_program_, north_latlong_, east_latlong_.linear_scale, input_scale,
                    "EnvironmentMaps north pass", error))
     return false;
@@ -421,8 +426,7 @@ bool EnvironmentMaps::updateDiffuse(std::string& error, float new_weight) {
       storage_ == CubeStorage::kSrgb8 ? blendedScale(input_scale, diffuse_.linear_scale, *weight) : 1.0f;
   resample_program_.use();
   bindPreviousDiffuse(resample_program_, *weight);
-  // Unit 2: a 2D sampler, so unit 0 keeps a cube map bound for u_input
-  // (declared by every pass of the file; unused here).
+  // Unit 2 (unit 1 holds the previous diffuse cube for the blend).
   glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_2D, north_latlong_.texture.id());
   glUniform1i(resample_program_.uniform("u_latlong"), 2);
