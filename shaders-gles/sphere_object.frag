@@ -1,9 +1,15 @@
 #version 100
 // Stage 4: ibl::shadeSurface in linear light, then sRGB-encoded (clamped).
 // The reflection term reads the ladder mirror, glossy 0..L-1, diffuse
-// (src/ibl/surface_shading.hpp) between the two rungs nearest to
-// u_glossiness; samplers of absent glossy levels are bound to a valid cube
-// map and never read.
+// (src/ibl/surface_shading.hpp) between the two rungs nearest to the
+// material's glossiness. Which two is fixed when the program is built:
+// REFLECTION_LOWER_RUNG, and REFLECTION_UPPER_RUNG when the blend reads a
+// second one (0 mirror, 1 glossy 0, 2 glossy 1, 3 diffuse; ObjectCompositor
+// picks them with ibl::reflectionLadderBlend). A uniform branch would skip
+// the rest on most GPUs, but some run every side of a branch, masked
+// (llvmpipe does), and each lookup is four cube reads: choosing at build
+// time halved this pass there. Samplers of rungs not read are still bound
+// to a valid cube map.
 #include "color_transfer.glsl"
 #include "cube_storage.glsl"
 
@@ -22,8 +28,7 @@ uniform float u_glossy0_scale;
 uniform samplerCube u_glossy1_map;
 uniform float u_glossy1_face_size;
 uniform float u_glossy1_scale;
-uniform float u_glossy_levels;  // L: 0, 1 or 2
-uniform float u_glossiness;
+uniform float u_toward_upper_rung;  // the upper rung's weight, in (0, 1)
 
 uniform vec3 u_albedo;
 uniform float u_material_ambient;
@@ -40,12 +45,17 @@ uniform vec3 u_highlight_rgb;
 uniform vec3 u_clipped_direction_w[4];
 uniform vec3 u_clipped_diffuse_rgb[4];
 
-// Rung k of the ladder: 0 mirror, 1..L glossy (at the mirror direction), L + 1 diffuse (at the normal).
-vec3 rung(float k, vec3 mirror, vec3 diffuse) {
-  if (k > u_glossy_levels + 0.5) return diffuse;
-  if (k < 0.5) return sampleCubeBilinear(u_reflection_map, mirror, u_reflection_face_size, u_reflection_scale).rgb;
-  if (k < 1.5) return sampleCubeBilinear(u_glossy0_map, mirror, u_glossy0_face_size, u_glossy0_scale).rgb;
-  return sampleCubeBilinear(u_glossy1_map, mirror, u_glossy1_face_size, u_glossy1_scale).rgb;
+#ifndef REFLECTION_LOWER_RUNG
+#define REFLECTION_LOWER_RUNG 0
+#endif
+
+// The ladder's rungs by kind: the mirror and glossy maps at the mirror
+// direction, the diffuse map at the normal (already looked up).
+vec3 ladderRung(int kind, vec3 mirror, vec3 diffuse) {
+  if (kind == 0) return sampleCubeBilinear(u_reflection_map, mirror, u_reflection_face_size, u_reflection_scale).rgb;
+  if (kind == 1) return sampleCubeBilinear(u_glossy0_map, mirror, u_glossy0_face_size, u_glossy0_scale).rgb;
+  if (kind == 2) return sampleCubeBilinear(u_glossy1_map, mirror, u_glossy1_face_size, u_glossy1_scale).rgb;
+  return diffuse;
 }
 
 void main() {
@@ -57,12 +67,12 @@ void main() {
   vec3 mirror = reflect(-to_eye, n);
   vec3 diffuse = sampleCubeBilinear(u_diffuse_map, n, u_diffuse_face_size, u_diffuse_scale).rgb;
   for (int k = 0; k < 4; ++k) diffuse += u_clipped_diffuse_rgb[k] * max(dot(n, u_clipped_direction_w[k]), 0.0);
-  // ibl::reflectionLadderBlend: exact at glossiness 0 and 1, where the other rung is not read.
-  float position = (1.0 - clamp(u_glossiness, 0.0, 1.0)) * (u_glossy_levels + 1.0);
-  float lower = floor(position);
-  float toward_next = position - lower;
-  vec3 reflection = rung(lower, mirror, diffuse);
-  if (toward_next > 0.0) reflection = mix(reflection, rung(lower + 1.0, mirror, diffuse), toward_next);
+  // ladderRung's kind is a constant here, so the compiler keeps only that
+  // rung's lookup.
+  vec3 reflection = ladderRung(REFLECTION_LOWER_RUNG, mirror, diffuse);
+#ifdef REFLECTION_UPPER_RUNG
+  reflection = mix(reflection, ladderRung(REFLECTION_UPPER_RUNG, mirror, diffuse), u_toward_upper_rung);
+#endif
   vec3 color = u_ambient_rgb * u_material_ambient + u_k_diffuse * diffuse * u_albedo +
                u_k_specular * u_highlight_rgb * highlight + u_k_reflect * reflection;
   gl_FragColor = vec4(linearToSrgb(color), 1.0);

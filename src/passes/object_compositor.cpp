@@ -13,6 +13,12 @@
 namespace probelight::passes {
 
 namespace {
+// The rungs the object reads: the glossy levels only once updateGlossy has
+// made them (otherwise the ladder is mirror -> diffuse).
+ReflectionRungs rungsFor(const ibl::SurfaceMaterial& material, const EnvironmentMaps& environment) {
+  return reflectionRungsFor(material.glossiness, environment.glossyWritten() ? environment.glossyLevels() : 0);
+}
+
 // The bound 2D texture's minification and magnification filter.
 void setTextureFilter(GLint filter) {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
@@ -31,6 +37,20 @@ double sphereSilhouetteRadiusBoundPx(double focal_px, double radius_m, double de
   return focal_px * radius_m / (depth_m - radius_m);
 }
 
+ReflectionRungs reflectionRungsFor(float glossiness, int glossy_levels) {
+  const int levels = std::clamp(glossy_levels, 0, 2);
+  // Rung k of the ladder: 0 the mirror, 1..L the glossy maps, L + 1 the diffuse map.
+  auto kindOf = [levels](int rung) { return rung == 0 ? 0 : rung <= levels ? rung : 3; };
+  const ibl::ReflectionLadderBlend blend = ibl::reflectionLadderBlend(glossiness, levels);
+  ReflectionRungs rungs;
+  rungs.lower_kind = kindOf(blend.lower);
+  if (blend.toward_next > 0.0f) {
+    rungs.upper_kind = kindOf(blend.lower + 1);
+    rungs.toward_upper = blend.toward_next;
+  }
+  return rungs;
+}
+
 bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const ObjectCompositorSettings& settings,
                             CubeStorage storage, std::string& error) {
   settings_ = settings;
@@ -47,13 +67,12 @@ bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const Ob
   auto image_program = gles::Program::fromEmbedded("image_quad.vert", "image_quad.frag", "", error);
   if (!image_program) return false;
   image_program_ = std::move(*image_program);
-  auto sphere_program = gles::Program::fromEmbedded("sphere_object.vert", "sphere_object.frag",
-                                                    cubeStorageDefines(storage), error);
-  if (!sphere_program) return false;
-  sphere_program_ = std::move(*sphere_program);
-  auto mesh_program = gles::Program::fromEmbedded("mesh_object.vert", "sphere_object.frag", cubeStorageDefines(storage), error);
-  if (!mesh_program) return false;
-  mesh_program_ = std::move(*mesh_program);
+  // The mirror-only programs (glossiness 1, the default) now, so a shader
+  // that does not build fails init; other rungs' programs on first use.
+  shading_programs_.clear();
+  if (!shadingProgram(ObjectShape::kSphere, ReflectionRungs{}, error) ||
+      !shadingProgram(ObjectShape::kMesh, ReflectionRungs{}, error))
+    return false;
 
   sphere_meshes_.clear();
   for (int segments : kSphereSegmentSteps) {
@@ -99,6 +118,19 @@ bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const Ob
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
   overlay_ = gles::Texture();
   return gles::checkGl("ObjectCompositor::init", error);
+}
+
+const gles::Program* ObjectCompositor::shadingProgram(ObjectShape shape, const ReflectionRungs& rungs,
+                                                     std::string& error) {
+  const auto key = std::make_tuple(shape, rungs.lower_kind, rungs.upper_kind);
+  if (auto found = shading_programs_.find(key); found != shading_programs_.end()) return &found->second;
+  std::string defines = cubeStorageDefines(storage_) + "#define REFLECTION_LOWER_RUNG " +
+                        std::to_string(rungs.lower_kind) + "\n";
+  if (rungs.upper_kind >= 0) defines += "#define REFLECTION_UPPER_RUNG " + std::to_string(rungs.upper_kind) + "\n";
+  auto program = gles::Program::fromEmbedded(shape == ObjectShape::kSphere ? "sphere_object.vert" : "mesh_object.vert",
+                                             "sphere_object.frag", defines, error);
+  if (!program) return nullptr;
+  return &shading_programs_.emplace(key, std::move(*program)).first->second;
 }
 
 void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_frame) {
@@ -170,8 +202,7 @@ bool ObjectCompositor::prepareShading(const gles::Program& program, const Camera
     glUniform1f(program.uniform((name + "_face_size").c_str()), static_cast<float>(map.face_size));
     glUniform1f(program.uniform((name + "_scale").c_str()), map.linear_scale);
   }
-  glUniform1f(program.uniform("u_glossy_levels"), static_cast<float>(glossy_levels));
-  glUniform1f(program.uniform("u_glossiness"), material.glossiness);
+  glUniform1f(program.uniform("u_toward_upper_rung"), reflectionRungsFor(material.glossiness, glossy_levels).toward_upper);
   glActiveTexture(GL_TEXTURE0);
 
   glUniform3fv(program.uniform("u_albedo"), 1, glm::value_ptr(material.albedo));
@@ -210,7 +241,9 @@ bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const Po
                                         glm::dvec3 centre_w, double radius_m, const ibl::SurfaceMaterial& material,
                                         const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
                                         std::string& error) {
-  const gles::Program& program = sphere_program_;
+  const gles::Program* shading = shadingProgram(ObjectShape::kSphere, rungsFor(material, environment), error);
+  if (shading == nullptr) return false;
+  const gles::Program& program = *shading;
   if (!prepareShading(program, camera, pose, material, lighting, environment, error)) return false;
   glUniform3f(program.uniform("u_center_w"), static_cast<float>(centre_w.x), static_cast<float>(centre_w.y),
               static_cast<float>(centre_w.z));
@@ -245,7 +278,9 @@ bool ObjectCompositor::drawMeshObject(const CameraIntrinsics& camera, const Pose
                                       const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
                                       std::string& error) {
   if (triangles.empty()) return true;
-  const gles::Program& program = mesh_program_;
+  const gles::Program* shading = shadingProgram(ObjectShape::kMesh, rungsFor(material, environment), error);
+  if (shading == nullptr) return false;
+  const gles::Program& program = *shading;
   if (!prepareShading(program, camera, pose, material, lighting, environment, error)) return false;
   if (!mesh_vertices_.valid()) mesh_vertices_ = gles::Buffer::create();
   glBindBuffer(GL_ARRAY_BUFFER, mesh_vertices_.id());

@@ -7,7 +7,9 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -21,6 +23,17 @@
 #include "passes/environment_maps.hpp"
 
 namespace probelight::passes {
+
+// The reflection ladder's rungs (ibl/surface_shading.hpp) as the maps the
+// object shader reads: kinds 0 mirror, 1 glossy 0, 2 glossy 1, 3 diffuse.
+// R = mix(lower, upper, toward_upper); upper_kind is -1 when the blend reads
+// only the lower rung (toward_upper 0).
+struct ReflectionRungs {
+  int lower_kind = 0;
+  int upper_kind = -1;
+  float toward_upper = 0.0f;
+};
+ReflectionRungs reflectionRungsFor(float glossiness, int glossy_levels);
 
 struct ObjectCompositorSettings {
   // The sphere is tessellated for its size on screen (sphereSegmentsFor):
@@ -73,11 +86,15 @@ class ObjectCompositor {
                       const ibl::SurfaceMaterial& material, const ibl::SceneLighting& lighting,
                       EnvironmentMaps& environment, std::string& error);
 
+  // The shading program for a shape and the ladder's rungs
+  // (reflectionRungsFor), built on first use and kept.
+  enum class ObjectShape { kSphere, kMesh };
+  const gles::Program* shadingProgram(ObjectShape shape, const ReflectionRungs& rungs, std::string& error);
+
   ObjectCompositorSettings settings_;
   CubeStorage storage_ = CubeStorage::kSrgb8;
   gles::Program image_program_;
-  gles::Program sphere_program_;
-  gles::Program mesh_program_;
+  std::map<std::tuple<ObjectShape, int, int>, gles::Program> shading_programs_;
   gles::Buffer mesh_vertices_;
   gles::FullScreenQuad quad_;
   struct SphereMesh {

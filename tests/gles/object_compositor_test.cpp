@@ -227,6 +227,35 @@ TEST_F(GpuTest, SphereSilhouetteLandsOnTheDistortedProjection) {
 // The tessellation follows the sphere's size on screen: the fewest facets
 // whose chords stay within the sag, and a radius bound that is never below
 // the true silhouette's (f R / sqrt(d^2 - R^2) on the axis).
+// The ladder mirror, glossy 0..L-1, diffuse as the maps the shader reads:
+// kinds 0 mirror, 1 and 2 the glossy levels, 3 diffuse.
+TEST(ReflectionRungs, ReadOnlyTheMapsTheBlendWeighs) {
+  // Glossiness 1 is the mirror alone and 0 the diffuse map alone, whatever L.
+  for (int levels : {0, 1, 2}) {
+    const passes::ReflectionRungs sharp = passes::reflectionRungsFor(1.0f, levels);
+    EXPECT_EQ(sharp.lower_kind, 0) << levels;
+    EXPECT_EQ(sharp.upper_kind, -1) << levels;
+    const passes::ReflectionRungs matte = passes::reflectionRungsFor(0.0f, levels);
+    EXPECT_EQ(matte.lower_kind, 3) << levels;
+    EXPECT_EQ(matte.upper_kind, -1) << levels;
+  }
+  // Without glossy maps, 0.25: p = 0.75 * 1 between the mirror and the diffuse map.
+  const passes::ReflectionRungs no_glossy = passes::reflectionRungsFor(0.25f, 0);
+  EXPECT_EQ(no_glossy.lower_kind, 0);
+  EXPECT_EQ(no_glossy.upper_kind, 3);
+  EXPECT_FLOAT_EQ(no_glossy.toward_upper, 0.75f);
+  // Two levels, 0.45: p = 0.55 * 3 = 1.65, glossy 0 then glossy 1.
+  const passes::ReflectionRungs two = passes::reflectionRungsFor(0.45f, 2);
+  EXPECT_EQ(two.lower_kind, 1);
+  EXPECT_EQ(two.upper_kind, 2);
+  EXPECT_NEAR(two.toward_upper, 0.65f, 1e-5f);
+  // One level, 0.2: p = 0.8 * 2 = 1.6, glossy 0 then the diffuse map (rung L + 1).
+  const passes::ReflectionRungs one = passes::reflectionRungsFor(0.2f, 1);
+  EXPECT_EQ(one.lower_kind, 1);
+  EXPECT_EQ(one.upper_kind, 3);
+  EXPECT_NEAR(one.toward_upper, 0.6f, 1e-5f);
+}
+
 TEST(SphereTessellation, FewestSegmentsWithinTheSagForABoundOnTheRadius) {
   const double sag_px = passes::ObjectCompositorSettings{}.max_silhouette_sag_px;
   const auto sag = [](double radius_px, int segments) { return radius_px * (1.0 - std::cos(glm::pi<double>() / segments)); };
@@ -238,7 +267,9 @@ TEST(SphereTessellation, FewestSegmentsWithinTheSagForABoundOnTheRadius) {
     previous = segments;
     const auto step = std::find(std::begin(passes::kSphereSegmentSteps), std::end(passes::kSphereSegmentSteps), segments);
     ASSERT_NE(step, std::end(passes::kSphereSegmentSteps));
-    if (step != std::begin(passes::kSphereSegmentSteps)) EXPECT_GT(sag(radius_px, *(step - 1)), sag_px) << radius_px;
+    if (step != std::begin(passes::kSphereSegmentSteps)) {
+      EXPECT_GT(sag(radius_px, *(step - 1)), sag_px) << radius_px;
+    }
   }
   // Too large for any step (or not finite): the finest.
   EXPECT_EQ(passes::sphereSegmentsFor(1e6, sag_px), 128);
