@@ -4,9 +4,7 @@
 // 5-term distortion, as sphere_object.vert.
 #include "camera_projection.glsl"
 
-attribute vec2 a_region_uv;  // [0, 1]^2 over the part of the square drawn
-uniform vec2 u_active_uv_min;  // that part, in the square's [0, 1]^2
-uniform vec2 u_active_uv_max;
+attribute vec2 a_region_uv;  // [0, 1]^2 over the square
 
 uniform vec2 u_region_centre_w;
 uniform float u_region_half_size_m;
@@ -21,8 +19,7 @@ uniform vec2 u_image_size_px;
 varying vec2 v_region_uv;
 
 void main() {
-  vec2 region_uv = mix(u_active_uv_min, u_active_uv_max, a_region_uv);
-  vec3 position_w = vec3(u_region_centre_w + u_region_half_size_m * (2.0 * region_uv - 1.0), 0.0);
+  vec3 position_w = vec3(u_region_centre_w + u_region_half_size_m * (2.0 * a_region_uv - 1.0), 0.0);
   vec3 position_cam = u_rotation_cam_from_world * position_w + u_translation_cam_from_world;
   // Points behind the camera are pushed off screen; the ground square is
   // drawn only when the camera sees it from above, in front.
@@ -31,5 +28,5 @@ void main() {
   vec2 pixel = u_focal_px * distorted + u_principal_px;
   vec2 ndc = vec2(2.0 * (pixel.x + 0.5) / u_image_size_px.x - 1.0, 1.0 - 2.0 * (pixel.y + 0.5) / u_image_size_px.y);
   gl_Position = vec4(ndc * z, 0.0, z);
-  v_region_uv = region_uv;
+  v_region_uv = a_region_uv;
 }

@@ -84,6 +84,23 @@ std::vector<glm::vec3> casterTriangles(const ibl::ShadowCaster& caster, int segm
   return triangles;
 }
 
+std::vector<bool> darkeningCells(const std::vector<glm::vec3>& fraction, int n, int segments) {
+  std::vector<bool> cells(static_cast<std::size_t>(segments) * segments, false);
+  if (n <= 0 || segments <= 0 || fraction.size() != static_cast<std::size_t>(n) * n) return cells;
+  // The cell of texel column (or row) t: floor(t * segments / n).
+  auto cellOf = [&](int t) { return std::clamp(t * segments / n, 0, segments - 1); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const glm::vec3& f = fraction[static_cast<std::size_t>(j) * n + i];
+      if (!(std::min({f.r, f.g, f.b}) < 254.5f / 255.0f)) continue;
+      // The texel and its neighbours: the cells they fall in.
+      for (int cj = cellOf(std::max(0, j - 1)); cj <= cellOf(std::min(n - 1, j + 1)); ++cj)
+        for (int ci = cellOf(std::max(0, i - 1)); ci <= cellOf(std::min(n - 1, i + 1)); ++ci)
+          cells[static_cast<std::size_t>(cj) * segments + ci] = true;
+    }
+  return cells;
+}
+
 bool GroundShadow::init(const gles::Capabilities& capabilities, const GroundShadowSettings& settings,
                         std::string& error) {
   settings_ = settings;
@@ -137,22 +154,16 @@ bool GroundShadow::init(const gles::Capabilities& capabilities, const GroundShad
       uv.push_back(static_cast<float>(i) / n);
       uv.push_back(static_cast<float>(j) / n);
     }
-  std::vector<GLushort> indices;
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const auto at = [&](int a, int b) { return static_cast<GLushort>(b * (n + 1) + a); };
-      indices.insert(indices.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-    }
+  if ((n + 1) * (n + 1) > 65536) {
+    error = "ground shadow: region_mesh_segments must be at most 255 (16-bit indices)";
+    return false;
+  }
   region_vertices_ = gles::Buffer::create();
   glBindBuffer(GL_ARRAY_BUFFER, region_vertices_.id());
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uv.size() * sizeof(float)), uv.data(), GL_STATIC_DRAW);
-  region_indices_ = gles::Buffer::create();
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, region_indices_.id());
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLushort)), indices.data(),
-               GL_STATIC_DRAW);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
-  region_index_count_ = static_cast<GLsizei>(indices.size());
+  region_indices_ = gles::Buffer::create();
+  region_index_count_ = 0;
   caster_vertices_ = gles::Buffer::create();
   return gles::checkGl("GroundShadow::init", error);
 }
@@ -329,27 +340,28 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   glActiveTexture(GL_TEXTURE0);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   if (!gles::checkGl("ground shadow pass", error)) return false;
-  // The part of the square that is darker than one 8-bit step anywhere: the
-  // composite draws only that every frame (on llvmpipe the whole 1 m square
-  // cost ~8 ms a frame; the shadow itself is usually a small part of it).
+  // The composite draws, every frame, only the grid cells the shadow darkens
+  // by at least one 8-bit step: with low lights the shadows are long
+  // streaks, and their bounding box was half a 640x480 frame (4 ms a frame
+  // on llvmpipe), most of it left unchanged.
   const auto fraction = readFraction(error);
   if (!fraction) return false;
-  const int n = ground_size;
-  int i0 = n, j0 = n, i1 = -1, j1 = -1;
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const glm::vec3& f = (*fraction)[static_cast<std::size_t>(j) * n + i];
-      if (std::min({f.r, f.g, f.b}) < 254.5f / 255.0f) {
-        i0 = std::min(i0, i), i1 = std::max(i1, i);
-        j0 = std::min(j0, j), j1 = std::max(j1, j);
-      }
-    }
-  if (i1 < 0) return true;  // nothing darkens the ground by a step: nothing to draw
-  // One texel of margin each way (bilinear reads reach half a texel out).
-  active_uv_min_ = glm::vec2(std::max(0, i0 - 1), std::max(0, j0 - 1)) / static_cast<float>(n);
-  active_uv_max_ = glm::vec2(std::min(n, i1 + 2), std::min(n, j1 + 2)) / static_cast<float>(n);
+  const int segments = settings_.region_mesh_segments;
+  const std::vector<bool> cells = darkeningCells(*fraction, ground_size, segments);
+  std::vector<GLushort> indices;
+  const auto at = [&](int a, int b) { return static_cast<GLushort>(b * (segments + 1) + a); };
+  for (int j = 0; j < segments; ++j)
+    for (int i = 0; i < segments; ++i)
+      if (cells[static_cast<std::size_t>(j) * segments + i])
+        indices.insert(indices.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+  region_index_count_ = static_cast<GLsizei>(indices.size());
+  if (indices.empty()) return true;  // nothing darkens the ground by a step: nothing to draw
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, region_indices_.id());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLushort)), indices.data(),
+               GL_DYNAMIC_DRAW);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
   has_shadow_ = true;
-  return true;
+  return gles::checkGl("ground shadow cells", error);
 }
 
 bool GroundShadow::drawOnCameraImage(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
@@ -359,8 +371,6 @@ bool GroundShadow::drawOnCameraImage(const CameraIntrinsics& camera, const PoseC
   glUniform2f(composite_program_.uniform("u_region_centre_w"), static_cast<float>(region_.centre_w.x),
               static_cast<float>(region_.centre_w.y));
   glUniform1f(composite_program_.uniform("u_region_half_size_m"), static_cast<float>(region_.half_size_m));
-  glUniform2f(composite_program_.uniform("u_active_uv_min"), active_uv_min_.x, active_uv_min_.y);
-  glUniform2f(composite_program_.uniform("u_active_uv_max"), active_uv_max_.x, active_uv_max_.y);
   const glm::mat3 rotation(pose.R_cam_from_world);
   glUniformMatrix3fv(composite_program_.uniform("u_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
   glUniform3f(composite_program_.uniform("u_translation_cam_from_world"), static_cast<float>(pose.t_cam_from_world.x),

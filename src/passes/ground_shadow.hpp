@@ -33,7 +33,9 @@ struct GroundShadowSettings {
   int shadow_map_size_px = 256;       // the object's bounding sphere fills it: 0.3 mm texels for a 7 cm sphere
   int ground_texture_size_px = 256;   // over the square the shadows reach
   double max_region_half_size_m = 0.5;  // lights near the horizon cast shadows this far at most
-  int region_mesh_segments = 16;      // the square's grid for the lens distortion in the composite
+  // The square's grid in the composite: its vertices follow the lens
+  // distortion, and only its cells that the shadow darkens are drawn.
+  int region_mesh_segments = 32;
   bool force_packed_depth = false;    // use the RGBA8 path even with OES_depth_texture (tests, comparison)
   ibl::CameraTransfer camera_transfer;  // how the camera's bytes decode to light
 };
@@ -90,12 +92,10 @@ class GroundShadow {
   gles::Buffer caster_vertices_;
   GLsizei caster_vertex_count_ = 0;
   gles::Buffer region_vertices_;
+  // The grid cells the composite draws (darkeningCells of the last update).
   gles::Buffer region_indices_;
   GLsizei region_index_count_ = 0;
   ibl::GroundRegion region_;
-  // The part of the ground texture that darkens anything (uv); the rest of
-  // the square is left alone by the composite.
-  glm::vec2 active_uv_min_{0.0f}, active_uv_max_{1.0f};
   bool has_shadow_ = false;
   int shadow_passes_last_update_ = 0;
 };
@@ -111,6 +111,13 @@ struct LightView {
   glm::dvec2 ground_depth_gradient_per_uv{0.0};  // d(depth01) / d(uv) of the ground plane z = 0
 };
 LightView lightViewFor(const glm::dvec3& direction_w, const glm::dvec3& centre_w, double radius_m);
+
+// Which cells of a segments x segments grid over the ground texture (n x n
+// fractions, row-major) the composite must draw: those holding a texel
+// darker than one 8-bit step (below 254.5 / 255 in any channel), or next to
+// one, since bilinear reads reach half a texel past it. Row-major, cell
+// (i, j) covering texels [i n / segments, (i + 1) n / segments).
+std::vector<bool> darkeningCells(const std::vector<glm::vec3>& fraction, int n, int segments);
 
 // The object as triangles (3 vertices each), W metres: a sphere of
 // `segments` around (segments / 2 rings), or a box's 12 triangles.

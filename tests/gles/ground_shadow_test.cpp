@@ -250,6 +250,108 @@ TEST_F(GpuTest, CompositeDarkensTheCameraPixelsByTheFractionInLinearLight) {
   EXPECT_EQ(code(outside), 180.0);
 }
 
+// The composite draws only the grid cells the shadow darkens: everywhere
+// the ground square covers, the frame must still be the full composite,
+// encode(decode(180) f), where f is the fraction at that point. A pixel's
+// centre falls between ground texels, so its f lies between the least and
+// the greatest of the texel's 3 x 3 neighbourhood (bilinear weights are
+// convex); one code more each way for the re-encoding's rounding. The
+// room's dome casts several long streaks, so whole cells are skipped.
+TEST_F(GpuTest, CompositeOfTheDarkenedCellsIsTheFullCompositeEverywhere) {
+  std::string error;
+  const CameraIntrinsics camera = test::testCamera();
+  const PoseCamFromWorld pose = test::lookAt({0.05, -0.4, 0.5}, {0.0, 0.0, 0.0});
+  ImageRGB8 frame;
+  frame.resize(camera.width_px, camera.height_px);
+  std::fill(frame.pixels.begin(), frame.pixels.end(), std::uint8_t{180});
+  passes::CameraFrameTexture texture;
+  ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
+  ASSERT_TRUE(texture.upload(frame, error)) << error;
+  passes::ObjectCompositor compositor;
+  ASSERT_TRUE(compositor.init(test::sharedCapabilities(), {}, passes::CubeStorage::kSrgb8, error)) << error;
+  passes::GroundShadow shadow;
+  const passes::GroundShadowSettings settings;
+  ASSERT_TRUE(shadow.init(test::sharedCapabilities(), settings, error)) << error;
+  ibl::ShadowCaster sphere;
+  sphere.radius_m = 0.035;
+  ASSERT_TRUE(shadow.update(roomLights(), sphere, error)) << error;
+  ASSERT_TRUE(shadow.hasShadow());
+  const auto fraction = shadow.readFraction(error);
+  ASSERT_TRUE(fraction) << error;
+  const int n = shadow.groundTextureSizePx();
+  const std::vector<bool> cells = passes::darkeningCells(*fraction, n, settings.region_mesh_segments);
+  const auto drawn = std::count(cells.begin(), cells.end(), true);
+  EXPECT_GT(drawn, 0);
+  EXPECT_LT(drawn, static_cast<long>(cells.size()) * 3 / 4) << "the streaks leave most cells out";
+
+  gles::RenderTarget target;
+  ASSERT_TRUE(target.init(camera.width_px, camera.height_px, error)) << error;
+  target.bind();
+  compositor.drawCameraBackground(texture);
+  ASSERT_TRUE(shadow.drawOnCameraImage(camera, pose, texture, error)) << error;
+  ImageRGB8 out;
+  ASSERT_TRUE(target.readRGB(out, error)) << error;
+  const double linear_180 = ibl::srgbToLinear(180.0 / 255.0);
+  int checked = 0, darkened = 0, outside_bounds = 0;
+  for (int j = 1; j + 1 < n; ++j)
+    for (int i = 1; i + 1 < n; ++i) {
+      float least = 1.0f, greatest = 0.0f;
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const float f = (*fraction)[static_cast<std::size_t>(j + dj) * n + (i + di)].g;
+          least = std::min(least, f);
+          greatest = std::max(greatest, f);
+        }
+      const glm::dvec2 p = shadow.groundPointOfTexel(i, j);
+      const glm::dvec2 px = ibl::projectToPixel(camera, pose.toCamera({p, 0.0}));
+      const int x = static_cast<int>(std::floor(px.x)), y = static_cast<int>(std::floor(px.y));
+      if (x < 0 || y < 0 || x >= camera.width_px || y >= camera.height_px) continue;
+      const double code = out.pixels[(static_cast<std::size_t>(y) * out.width + x) * 3 + 1];
+      const double low = 255.0 * ibl::linearToSrgb(linear_180 * least) - 1.0;
+      const double high = 255.0 * ibl::linearToSrgb(linear_180 * greatest) + 1.0;
+      ++checked;
+      if (code < 179.5) ++darkened;
+      if (code < low || code > high) ++outside_bounds;
+    }
+  std::printf("[ composite] %ld of %zu cells drawn; %d ground texels on screen, %d darkened, %d off the full composite\n",
+              static_cast<long>(drawn), cells.size(), checked, darkened, outside_bounds);
+  EXPECT_GT(checked, 10000);
+  EXPECT_GT(darkened, 1000);
+  EXPECT_EQ(outside_bounds, 0);
+}
+
+TEST(DarkeningCells, ATexelOneStepDarkMarksItsCellAndTheCellsItsNeighboursFallIn) {
+  const int n = 16, segments = 4;  // 4 x 4 texels a cell
+  std::vector<glm::vec3> fraction(static_cast<std::size_t>(n) * n, glm::vec3(1.0f));
+  auto count = [](const std::vector<bool>& cells) { return std::count(cells.begin(), cells.end(), true); };
+  EXPECT_EQ(count(passes::darkeningCells(fraction, n, segments)), 0);
+  // Not a step darker: 254.6 / 255 in every channel draws nothing.
+  fraction[5 * n + 5] = glm::vec3(254.6f / 255.0f);
+  EXPECT_EQ(count(passes::darkeningCells(fraction, n, segments)), 0);
+  // One channel a step darker, inside cell (1, 1): that cell alone.
+  fraction[5 * n + 5] = glm::vec3(1.0f, 254.4f / 255.0f, 1.0f);
+  std::vector<bool> cells = passes::darkeningCells(fraction, n, segments);
+  EXPECT_EQ(count(cells), 1);
+  EXPECT_TRUE(cells[1 * segments + 1]);
+  // A texel on cell (2, 1)'s left edge: its left neighbour lies in cell (1, 1).
+  fraction[5 * n + 5] = glm::vec3(1.0f);
+  fraction[6 * n + 8] = glm::vec3(0.5f);
+  cells = passes::darkeningCells(fraction, n, segments);
+  EXPECT_EQ(count(cells), 2);
+  EXPECT_TRUE(cells[1 * segments + 1]);
+  EXPECT_TRUE(cells[1 * segments + 2]);
+  // A corner texel of cell (1, 1) at (7, 7): four cells share its neighbourhood.
+  fraction[6 * n + 8] = glm::vec3(1.0f);
+  fraction[7 * n + 7] = glm::vec3(0.0f);
+  EXPECT_EQ(count(passes::darkeningCells(fraction, n, segments)), 4);
+  // A size that does not divide: 10 texels over 4 cells still covers every texel.
+  std::vector<glm::vec3> odd(100, glm::vec3(1.0f));
+  odd[9 * 10 + 9] = glm::vec3(0.0f);
+  cells = passes::darkeningCells(odd, 10, segments);
+  EXPECT_TRUE(cells[3 * segments + 3]);
+  EXPECT_EQ(count(cells), 1);
+}
+
 // Stress: all finite and sensible. A light a hair above the horizon (the
 // ground's depth slope in its map goes as 1 / z), a big object whose shadow
 // the region's cap cuts off, a tiny one, one far from the tag.
