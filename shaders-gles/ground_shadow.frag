@@ -1,35 +1,34 @@
 #version 100
-// The fraction of the ground's irradiance that reaches each ground point:
-// 1 - sum_i share_i * hidden_i, ibl::groundLightFraction's model. Each light
-// is a cone of half-angle atan(u_tan_cone[i]); its hidden share is found
-// PCSS-style: the mean depth of the blockers around the point (searched over
-// the widest penumbra the object can cast there) gives the occluder's
-// distance t, and the share of shadow-map taps within t tan(cone) that are
-// blocked is the share of the cone the object hides. The maps hold the
-// object's far side from the light (ground_shadow.cpp says why).
+// One light's hidden share of the ground's irradiance, share * hidden, which
+// GroundShadow subtracts (by blending) from a ground texture cleared to 1:
+// after every light, 1 - sum_i share_i * hidden_i, ibl::groundLightFraction's
+// model. Each light is drawn only over the ground its shadow can reach
+// (shadowFootprintNdc). The light is a cone of half-angle atan(u_tan_cone);
+// its hidden share is found PCSS-style: the mean depth of the blockers
+// around the point (searched over the widest penumbra the object can cast
+// there) gives the occluder's distance t, and the share of shadow-map taps
+// within t tan(cone) that are blocked is the share of the cone the object
+// hides. The map holds the object's far side from the light
+// (ground_shadow.cpp says why).
 //
 // Precision: positions are metres within half a metre and depths are in
 // [0, 1] of a few centimetres' range; mediump (10 bits) resolves depth to
 // ~1/1000 of the object's size, which the bias covers.
 #include "depth_packing.glsl"
 
-#ifndef MAX_LIGHTS
-#define MAX_LIGHTS 8
-#endif
 #define TAPS 16
 // Below any depth the object can have (its frustum has a 4% margin).
 const float kEmpty01 = 0.01;
 
-uniform sampler2D u_shadow_map[MAX_LIGHTS];
-uniform mat4 u_light_clip_from_world[MAX_LIGHTS];
-uniform vec3 u_share[MAX_LIGHTS];
-uniform float u_tan_cone[MAX_LIGHTS];
+uniform sampler2D u_shadow_map;
+uniform mat4 u_light_clip_from_world;
+uniform vec3 u_share;
+uniform float u_tan_cone;
 // How the ground's own depth changes across the map, per unit of uv: the
 // receiver is the ground plane, so each tap compares the stored depth with
 // the ground's depth at that tap, not at the centre (receiver-plane bias).
-uniform vec2 u_ground_gradient[MAX_LIGHTS];
-uniform int u_light_count;
-uniform float u_map_width_m;    // the orthographic frustum's width (all maps alike)
+uniform vec2 u_ground_gradient;
+uniform float u_map_width_m;    // the orthographic frustum's width
 uniform float u_depth_range_m;  // and its depth
 uniform float u_texel_uv;       // one shadow-map texel, in uv
 // A ground point at the object's far side, within this much depth, counts
@@ -37,52 +36,48 @@ uniform float u_texel_uv;       // one shadow-map texel, in uv
 // a sphere's contact) the ground is hidden, not lit.
 uniform float u_bias01;
 uniform vec2 u_taps[TAPS];      // a unit disc, evenly covered
-uniform float u_output_blocked; // 0: write 1 - blocked (first batch); 1: write blocked (later batches, subtracted)
 varying vec2 v_ground_w;
 
-float storedDepth(sampler2D map, vec2 uv) {
+float storedDepth(vec2 uv) {
 #ifdef SHADOW_DEPTH_PACKED
-  return unpackDepth(texture2D(map, uv));
+  return unpackDepth(texture2D(u_shadow_map, uv));
 #else
-  return texture2D(map, uv).r;
+  return texture2D(u_shadow_map, uv).r;
 #endif
 }
 
 void main() {
-  vec3 blocked = vec3(0.0);
-  for (int i = 0; i < MAX_LIGHTS; ++i) {
-    if (i >= u_light_count) break;
-    vec4 clip = u_light_clip_from_world[i] * vec4(v_ground_w, 0.0, 1.0);
-    vec2 uv = 0.5 * clip.xy + 0.5;
-    // The object lies within depths 0.02-0.98 of its frustum; the map holds
-    // its far side and is cleared to 0 where it is absent.
-    float receiver = 0.5 * clip.z + 0.5;
-    // Blocker search over the penumbra an occluder at the near plane would cast.
-    float metres_to_uv = u_tan_cone[i] / u_map_width_m;
-    float search_uv = receiver * u_depth_range_m * metres_to_uv + u_texel_uv;
-    // NEAREST reads the depth at a texel's centre, up to half a texel
-    // diagonal from the tap: that much of the ground's slope, plus the bias.
-    float bias = u_bias01 + 0.71 * u_texel_uv * length(u_ground_gradient[i]);
-    float blocker_sum = 0.0;
-    float blockers = 0.0;
-    for (int k = 0; k < TAPS; ++k) {
-      vec2 offset = search_uv * u_taps[k];
-      float d = storedDepth(u_shadow_map[i], uv + offset);
-      if (d > kEmpty01 && d < receiver + dot(u_ground_gradient[i], offset) + bias) {
-        blocker_sum += d;
-        blockers += 1.0;
-      }
+  vec4 clip = u_light_clip_from_world * vec4(v_ground_w, 0.0, 1.0);
+  vec2 uv = 0.5 * clip.xy + 0.5;
+  // The object lies within depths 0.02-0.98 of its frustum; the map holds
+  // its far side and is cleared to 0 where it is absent.
+  float receiver = 0.5 * clip.z + 0.5;
+  // Blocker search over the penumbra an occluder at the near plane would cast.
+  float metres_to_uv = u_tan_cone / u_map_width_m;
+  float search_uv = receiver * u_depth_range_m * metres_to_uv + u_texel_uv;
+  // NEAREST reads the depth at a texel's centre, up to half a texel
+  // diagonal from the tap: that much of the ground's slope, plus the bias.
+  float bias = u_bias01 + 0.71 * u_texel_uv * length(u_ground_gradient);
+  float blocker_sum = 0.0;
+  float blockers = 0.0;
+  for (int k = 0; k < TAPS; ++k) {
+    vec2 offset = search_uv * u_taps[k];
+    float d = storedDepth(uv + offset);
+    if (d > kEmpty01 && d < receiver + dot(u_ground_gradient, offset) + bias) {
+      blocker_sum += d;
+      blockers += 1.0;
     }
-    if (blockers < 0.5) continue;
+  }
+  float hidden = 0.0;
+  if (blockers > 0.5) {
     float distance_m = (receiver - blocker_sum / blockers) * u_depth_range_m;
     float filter_uv = max(distance_m, 0.0) * metres_to_uv + u_texel_uv;
-    float hidden = 0.0;
     for (int k = 0; k < TAPS; ++k) {
       vec2 offset = filter_uv * u_taps[k];
-      float d = storedDepth(u_shadow_map[i], uv + offset);
-      hidden += d > kEmpty01 && d < receiver + dot(u_ground_gradient[i], offset) + bias ? 1.0 : 0.0;
+      float d = storedDepth(uv + offset);
+      hidden += d > kEmpty01 && d < receiver + dot(u_ground_gradient, offset) + bias ? 1.0 : 0.0;
     }
-    blocked += u_share[i] * (hidden / float(TAPS));
   }
-  gl_FragColor = vec4(u_output_blocked > 0.5 ? blocked : vec3(1.0) - blocked, 1.0);
+  // Alpha 0: the texture's alpha stays 1 under the subtraction.
+  gl_FragColor = vec4(u_share * (hidden / float(TAPS)), 0.0);
 }

@@ -1,7 +1,8 @@
 #version 100
 // The square of ground the shadows can reach, rasterised into its own
 // texture: texel (i, j) is ground point centre + half_size (2 (i, j) + 1) / N - 1.
-attribute vec2 a_position;
+// Drawn one light at a time over the part its shadow can reach.
+attribute vec2 a_position;  // the texture's NDC, [-1, 1]^2 over the square
 uniform vec2 u_region_centre_w;
 uniform float u_region_half_size_m;
 varying vec2 v_ground_w;

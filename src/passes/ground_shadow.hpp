@@ -9,11 +9,14 @@
 // frame, drawOnCameraImage() multiplies the camera pixels under that square
 // by the fraction (ratio-form differential rendering).
 //
-// Lights go through the ground pass in batches of as many shadow maps as the
-// fragment shader has texture units (at most 8): the first batch writes
-// 1 - blocked, the later ones subtract theirs (GL_FUNC_REVERSE_SUBTRACT).
+// The ground pass draws one light at a time, over only the ground its
+// shadow can reach (shadowFootprintNdc), and subtracts its hidden share
+// (GL_FUNC_REVERSE_SUBTRACT) from a texture cleared to 1. The composite
+// draws only the cells of the square that the shadow darkens
+// (darkeningCells).
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -61,7 +64,6 @@ class GroundShadow {
   const ibl::GroundRegion& region() const { return region_; }
   int shadowPassesLastUpdate() const { return shadow_passes_last_update_; }
   bool packedDepth() const { return packed_depth_; }
-  int lightsPerBatch() const { return lights_per_batch_; }
   std::string depthStorageDescription() const;
 
   // The ground texture read back: fraction per texel, row-major from the
@@ -81,11 +83,10 @@ class GroundShadow {
 
   GroundShadowSettings settings_;
   bool packed_depth_ = false;
-  int lights_per_batch_ = 8;
   gles::Program depth_program_;
   gles::Program ground_program_;
   gles::Program composite_program_;
-  gles::FullScreenQuad quad_;
+  gles::Buffer footprint_vertices_;  // one light's shadowFootprintNdc
   std::vector<ShadowMap> shadow_maps_;
   gles::Texture ground_texture_;
   gles::Framebuffer ground_framebuffer_;
@@ -112,6 +113,21 @@ struct LightView {
 };
 LightView lightViewFor(const glm::dvec3& direction_w, const glm::dvec3& centre_w, double radius_m);
 
+// The ground a light's shadow can reach, as the 4 corners (in order) of a
+// convex quad in the ground texture's NDC ([-1, 1]^2 over `region`): the
+// ground points whose place in the light's map (`view`, map_size_px square)
+// lies within reach of the object. The object fills a disc of radius
+// 0.5 / margin of the map's uv about its middle; ground_shadow.frag's taps
+// reach at most its blocker search radius, receiver depth x depth_m x
+// tan_cone / width_m + one texel, past a point, and a NEAREST read half a
+// texel diagonal further. The receiver depth is bounded by its greatest
+// value at the region's corners (it is linear on the ground). Outside the
+// quad every tap reads the empty map, so the light hides nothing there and
+// is not drawn. A light so low that the quad runs off far past the region
+// gets the whole square.
+std::array<glm::dvec2, 4> shadowFootprintNdc(const LightView& view, double tan_cone, int map_size_px,
+                                             const ibl::GroundRegion& region);
+
 // Which cells of a segments x segments grid over the ground texture (n x n
 // fractions, row-major) the composite must draw: those holding a texel
 // darker than one 8-bit step (below 254.5 / 255 in any channel), or next to
@@ -120,7 +136,8 @@ LightView lightViewFor(const glm::dvec3& direction_w, const glm::dvec3& centre_w
 std::vector<bool> darkeningCells(const std::vector<glm::vec3>& fraction, int n, int segments);
 
 // The object as triangles (3 vertices each), W metres: a sphere of
-// `segments` around (segments / 2 rings), or a box's 12 triangles.
+// `segments` around (segments / 2 rings), or a box's 12 triangles; each
+// counter-clockwise seen from outside (the depth pass culls by it).
 std::vector<glm::vec3> casterTriangles(const ibl::ShadowCaster& caster, int segments = 48);
 
 }  // namespace probelight::passes

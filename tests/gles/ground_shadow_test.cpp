@@ -1,6 +1,7 @@
 // The GPU ground shadow against its CPU reference (ibl::groundLightFraction),
 // on both depth storages, in batches, and composited onto a camera frame.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -173,30 +174,97 @@ INSTANTIATE_TEST_SUITE_P(DepthStorage, GroundShadowTest, ::testing::Values(false
                            return info.param ? std::string("PackedRGBA8") : std::string("DepthTexture");
                          });
 
-// GLES2 guarantees 8 texture units; with fewer per batch the lights go in
-// several batches, the later ones subtracted by blending: same result.
-TEST_F(GpuTest, LightsInSeveralBatchesGiveTheSameFraction) {
-  std::string error;
-  const std::vector<ibl::ShadowLight> lights = roomLights(16);
+// The depth pass culls the faces toward the light (it keeps the far side),
+// so the caster's triangles must all be counter-clockwise seen from
+// outside: the normal by the right-hand rule points away from the centre.
+TEST(CasterTriangles, AreCounterClockwiseSeenFromOutside) {
   ibl::ShadowCaster sphere;
-  std::vector<glm::vec3> results[2];
-  for (int units : {16, 3}) {
-    gles::Capabilities capabilities = test::sharedCapabilities();
-    capabilities.max_fragment_texture_units = units;
-    passes::GroundShadow shadow;
-    ASSERT_TRUE(shadow.init(capabilities, {}, error)) << error;
-    EXPECT_EQ(shadow.lightsPerBatch(), std::min(units, 8));
-    ASSERT_TRUE(shadow.update(lights, sphere, error)) << error;
-    auto fraction = shadow.readFraction(error);
-    ASSERT_TRUE(fraction) << error;
-    results[units == 3 ? 1 : 0] = *fraction;
+  sphere.radius_m = 0.035;
+  sphere.position_w = {0.02, -0.01};
+  ibl::ShadowCaster box;
+  box.shape = ibl::ShadowCaster::Shape::kBox;
+  box.box_size_m = {0.05, 0.03, 0.06};
+  box.box_yaw_rad = 0.4;
+  for (const auto& [name, caster] : {std::pair{"sphere", sphere}, std::pair{"box", box}}) {
+    const std::vector<glm::vec3> triangles = passes::casterTriangles(caster);
+    ASSERT_EQ(triangles.size() % 3, 0u);
+    const glm::vec3 centre(caster.boundingCentre());
+    int inward = 0, degenerate = 0;
+    for (std::size_t k = 0; k < triangles.size(); k += 3) {
+      const glm::vec3 n = glm::cross(triangles[k + 1] - triangles[k], triangles[k + 2] - triangles[k]);
+      const glm::vec3 outward = (triangles[k] + triangles[k + 1] + triangles[k + 2]) / 3.0f - centre;
+      const float along = glm::dot(n, outward);
+      // Pole triangles of the sphere collapse to a line (two equal corners).
+      if (glm::length(n) < 1e-12f) ++degenerate;
+      else if (!(along > 0.0f)) ++inward;
+    }
+    EXPECT_EQ(inward, 0) << name;
+    EXPECT_LT(degenerate, static_cast<int>(triangles.size() / 3) / 8) << name;
   }
-  double worst = 0.0;
-  for (std::size_t i = 0; i < results[0].size(); ++i)
-    worst = std::max(worst, static_cast<double>(std::abs(results[0][i].g - results[1][i].g)));
-  // Each batch's output is rounded to 8 bits before the next is subtracted:
-  // one code per extra batch (8 -> 2 batches of 8, 3 -> 6 batches: up to 5).
-  EXPECT_LE(worst, 6.0 / 255.0);
+}
+
+// Each light is drawn only over shadowFootprintNdc. Every ground point that
+// the light's cone can hide from the object (the CPU model, with the light
+// alone) must lie in that quad, for high and low lights, sharp and wide
+// ones, a sphere and a box; and for a high light the quad must be a small
+// part of the square, or nothing is saved.
+TEST(ShadowFootprint, HoldsEveryGroundPointTheLightsConeCanHide) {
+  ibl::ShadowCaster sphere;
+  sphere.radius_m = 0.035;
+  sphere.position_w = {0.03, -0.02};
+  ibl::ShadowCaster box;
+  box.shape = ibl::ShadowCaster::Shape::kBox;
+  box.box_size_m = {0.05, 0.03, 0.08};
+  box.box_yaw_rad = 0.7;
+  const int map_size = passes::GroundShadowSettings{}.shadow_map_size_px;
+  auto inside = [](const std::array<glm::dvec2, 4>& q, const glm::dvec2& p) {
+    double sign = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const glm::dvec2 e = q[(k + 1) % 4] - q[k], r = p - q[k];
+      const double cross = e.x * r.y - e.y * r.x;
+      if (sign == 0.0) sign = cross;
+      if (cross * sign < 0.0) return false;
+    }
+    return true;
+  };
+  int hidden_points = 0;
+  for (const auto& [name, caster] : {std::pair{"sphere", sphere}, std::pair{"box", box}})
+    for (double elevation : {12.0, 30.0, 60.0, 88.0})
+      for (double azimuth : {0.0, 75.0, 210.0})
+        for (double cone_deg : {0.25, 5.0, 25.0}) {
+          ibl::ShadowLight light;
+          light.direction_w = direction(azimuth, elevation);
+          light.share_rgb = glm::dvec3(1.0);
+          light.cone_radius_rad = glm::radians(cone_deg);
+          // The region as a dome sizes it: for its lowest light too.
+          ibl::ShadowLight lowest = light;
+          lowest.direction_w = direction(azimuth + 140.0, 12.0);
+          const ibl::GroundRegion region = ibl::groundShadowRegion(caster, {light, lowest}, 0.5);
+          const passes::LightView view =
+              passes::lightViewFor(light.direction_w, caster.boundingCentre(), caster.boundingRadius());
+          const std::array<glm::dvec2, 4> quad =
+              passes::shadowFootprintNdc(view, std::tan(light.cone_radius_rad), map_size, region);
+          int missed = 0;
+          const int grid = 120;
+          for (int j = 0; j < grid; ++j)
+            for (int i = 0; i < grid; ++i) {
+              const glm::dvec2 ndc((2.0 * i + 1.0) / grid - 1.0, (2.0 * j + 1.0) / grid - 1.0);
+              const glm::dvec2 p = region.centre_w + region.half_size_m * ndc;
+              if (ibl::groundLightFraction(p, caster, {light}, 64).g > 0.999) continue;
+              ++hidden_points;
+              if (!inside(quad, ndc)) ++missed;
+            }
+          EXPECT_EQ(missed, 0) << name << " elevation " << elevation << " azimuth " << azimuth << " cone " << cone_deg;
+          if (elevation >= 60.0 && cone_deg <= 5.0) {
+            // The quad's area (shoelace) against the square's 4.
+            double area = 0.0;
+            for (int k = 0; k < 4; ++k) area += quad[k].x * quad[(k + 1) % 4].y - quad[(k + 1) % 4].x * quad[k].y;
+            std::printf("[ footprint] %s, light at %.0f deg, cone %.2f deg: %.1f%% of the square\n", name, elevation, cone_deg,
+                        100.0 * 0.5 * std::abs(area) / 4.0);
+            EXPECT_LT(0.5 * std::abs(area), 0.25 * 4.0) << name << " elevation " << elevation << " cone " << cone_deg;
+          }
+        }
+  EXPECT_GT(hidden_points, 10000);
 }
 
 // The composite: a uniform floor of sRGB code 180 under an overhead light
