@@ -60,6 +60,10 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.tracking.quad_sigma = tracking.readDouble("quad_sigma", settings.tracking.quad_sigma, Range::closed(0.0, 5.0));
   settings.tracking.refine_edges = tracking.readBool("refine_edges", settings.tracking.refine_edges);
   settings.tracking.refine_corners = tracking.readBool("refine_corners", settings.tracking.refine_corners);
+  settings.tracking.refinement_reuse_px =
+      tracking.readDouble("refinement_reuse_px", settings.tracking.refinement_reuse_px, Range::closed(0.0, 10.0));
+  settings.tracking.refinement_reuse_frames =
+      tracking.readInt("refinement_reuse_frames", settings.tracking.refinement_reuse_frames, Range::closed(0, 100000));
   settings.tracking.track_in_window = tracking.readBool("track_in_window", settings.tracking.track_in_window);
   settings.tracking.full_frame_every_frames =
       tracking.readInt("full_frame_every_frames", settings.tracking.full_frame_every_frames, Range::closed(1, 100000));

@@ -34,6 +34,8 @@ struct TrackingConfig {
   double quad_sigma = 0.0;
   bool refine_edges = true;
   bool refine_corners = true;  // full-resolution linear-light edge fit (tracking/corner_refiner.hpp)
+  double refinement_reuse_px = 0.1;  // a still tag keeps its refinement (tracking/refinement_reuse.hpp)
+  int refinement_reuse_frames = 30;
   bool track_in_window = true;     // search a window around the predicted tag (tracking/tag_detector.hpp)
   int full_frame_every_frames = 30;
   tracking::PoseSmoothingSettings smoothing;  // tracking/pose_smoother.hpp

@@ -14,6 +14,8 @@ tracking::TagDetectorSettings tagDetectorSettings(const PipelineSettings& settin
   detector.quad_sigma = static_cast<float>(settings.tracking.quad_sigma);
   detector.refine_edges = settings.tracking.refine_edges;
   detector.refine_corners = settings.tracking.refine_corners;
+  detector.refinement_reuse_px = settings.tracking.refinement_reuse_px;
+  detector.refinement_reuse_frames = settings.tracking.refinement_reuse_frames;
   detector.track_in_window = settings.tracking.track_in_window;
   detector.full_frame_every_frames = settings.tracking.full_frame_every_frames;
   return detector;

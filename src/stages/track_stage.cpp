@@ -39,6 +39,7 @@ void TrackStage::run(FrameContext& ctx) {
   }
   ctx.view = ibl::MirrorBallView{camera_, ctx.track.pose, probe_center_w, probe_radius_m};
   tag_status_frames_[tracking::toString(ctx.track.status_code)] += 1;
+  if (ctx.track.refinement_reused) ++refinement_reused_frames_;
   if (!ctx.track.found) {
     report_.count("frames_without_tag");
     ctx.status = (ctx.track.status_code == tracking::TagTrackStatus::kNoTag ? "No tag in view: " : "Tag not usable: ") +
@@ -96,7 +97,9 @@ void TrackStage::refineProbe(FrameContext& ctx) {
 }
 
 void TrackStage::writeReport(nlohmann::json& report) const {
-  report["tag_status"] = {{"frames", tag_status_frames_}, {"last_problem", last_tag_problem_}};
+  report["tag_status"] = {{"frames", tag_status_frames_},
+                          {"last_problem", last_tag_problem_},
+                          {"refinement_reused_frames", refinement_reused_frames_}};
   nlohmann::json refinement = {{"enabled", settings_.probe_refinement.enabled},
                                {"fits", probe_fits_},
                                {"refused", probe_fits_refused_},

@@ -56,6 +56,7 @@ class TrackStage {
   std::unique_ptr<tracking::TagTracker> tracker_;
   std::unique_ptr<tracking::PoseSmoother> smoother_;
   std::map<std::string, long long> tag_status_frames_;
+  long long refinement_reused_frames_ = 0;  // frames that kept a still tag's refinement
   nlohmann::json last_tag_problem_;  // null until a frame's tag is not usable
   // probe_refinement's correction of rig.yaml's ball, and its record.
   glm::dvec3 probe_center_offset_w_{0.0};

@@ -44,6 +44,12 @@ struct TagDetectorSettings {
   // Costs ~2 ms a frame on the desktop; tests/tracking/pose_accuracy_test.cpp
   // measures both settings.
   bool refine_corners = true;
+  // With refine_corners: a frame whose detector corners are each within
+  // this of those of the last refined frame keeps that frame's refinement
+  // and polished pose, at most refinement_reuse_frames frames in a row
+  // (tracking/refinement_reuse.hpp). 0 refines every frame.
+  double refinement_reuse_px = 0.1;
+  int refinement_reuse_frames = 30;
   // While the tag is tracked from frame to frame, look for it only in a
   // window around where its motion predicts it (the printed tag plus a
   // margin), which costs in proportion to the window's area; the whole

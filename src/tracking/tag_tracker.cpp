@@ -279,12 +279,24 @@ PoseChoice PoseFlipResolver::choose(const std::vector<TagPoseSolution>& solution
 }
 
 TagTracker::TagTracker(TagDetectorSettings settings, RigGeometry rig, CameraIntrinsics camera)
-    : detector_(settings), rig_(std::move(rig)), camera_(camera), flip_resolver_(settings.pose_ambiguity_margin_px) {
+    : detector_(settings),
+      rig_(std::move(rig)),
+      camera_(camera),
+      flip_resolver_(settings.pose_ambiguity_margin_px),
+      refinement_reuse_(RefinementReuseSettings{settings.refinement_reuse_px, settings.refinement_reuse_frames}) {
   if (settings.family != rig_.tag_family)
     throw std::invalid_argument("detector family '" + settings.family + "' differs from the rig's tag_family '" +
                                 rig_.tag_family + "'");
   if (!(rig_.tag_size_m > 0.0)) throw std::invalid_argument("rig tag_size must be > 0");
   if (!(settings.pose_ambiguity_margin_px >= 0.0)) throw std::invalid_argument("pose_ambiguity_margin_px must be >= 0");
+  if (!(settings.refinement_reuse_px >= 0.0) || settings.refinement_reuse_frames < 0)
+    throw std::invalid_argument("refinement_reuse_px and refinement_reuse_frames must be >= 0");
+}
+
+void TagTracker::resetHistory() {
+  flip_resolver_.reset();
+  last_printed_corners_px_.reset();
+  refinement_reuse_.clear();
 }
 
 std::vector<TagDetection> TagTracker::detectAround(const std::uint8_t* luma, int width, int height, int stride_bytes) {
@@ -358,6 +370,7 @@ TagTrackResult TagTracker::track(const std::uint8_t* luma, int width, int height
   }
   std::sort(result.ids_in_view.begin(), result.ids_in_view.end());
   ++frames_since_found_;
+  if (!chosen || with_rig_id > 1) refinement_reuse_.clear();
   const std::string family = rig_.tag_family;
   if (with_rig_id > 1) {
     // Two prints of the rig's tag: a pose from the wrong one would put the
@@ -410,22 +423,34 @@ TagTrackResult TagTracker::track(const std::uint8_t* luma, int width, int height
   result.corners_px = chosen->corners_px;
   result.decision_margin = chosen->decision_margin;
   result.hamming = chosen->hamming;
-  std::vector<TagEdgePoint> edge_points;
-  if (detector_.settings().refine_corners) {
-    // Falls back to the detector's corners when an edge cannot be re-fitted
-    // (too little contrast, partly outside the frame).
-    if (auto refined = refineTagCorners(luma, width, height, stride_bytes, chosen->corners_px, camera_,
-                                        detector_.borderWidthCells())) {
-      result.corners_px = refined->corners_px;
-      edge_points = std::move(refined->edge_points);
+  std::vector<TagPoseSolution> solutions;
+  const bool refine = detector_.settings().refine_corners;
+  if (const RefinedTagPose* kept = refine ? refinement_reuse_.reuse(chosen->id, chosen->corners_px) : nullptr) {
+    result.corners_px = kept->corners_px;
+    solutions = kept->solutions;
+    result.refinement_reused = true;
+  } else {
+    std::vector<TagEdgePoint> edge_points;
+    if (refine) {
+      // Falls back to the detector's corners when an edge cannot be re-fitted
+      // (too little contrast, partly outside the frame).
+      if (auto refined = refineTagCorners(luma, width, height, stride_bytes, chosen->corners_px, camera_,
+                                          detector_.borderWidthCells())) {
+        result.corners_px = refined->corners_px;
+        edge_points = std::move(refined->edge_points);
+      }
     }
-  }
-
-  std::vector<TagPoseSolution> solutions = solveTagPoses(result.corners_px, rig_.tag_size_m, camera_);
-  try {
-    refineOnEdgePoints(solutions, result.corners_px, edge_points, rig_.tag_size_m, camera_);
-  } catch (const cv::Exception&) {
-    // keep the four-corner solutions
+    solutions = solveTagPoses(result.corners_px, rig_.tag_size_m, camera_);
+    try {
+      refineOnEdgePoints(solutions, result.corners_px, edge_points, rig_.tag_size_m, camera_);
+    } catch (const cv::Exception&) {
+      // keep the four-corner solutions
+    }
+    // Only a refinement that worked is worth keeping.
+    if (!edge_points.empty() && !solutions.empty())
+      refinement_reuse_.store(chosen->id, chosen->corners_px, RefinedTagPose{result.corners_px, solutions});
+    else
+      refinement_reuse_.clear();
   }
   if (solutions.empty()) {
     result.status_code = TagTrackStatus::kPoseFailed;

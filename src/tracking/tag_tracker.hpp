@@ -15,6 +15,7 @@
 #include <glm/glm.hpp>
 
 #include "core/types.hpp"
+#include "tracking/refinement_reuse.hpp"
 #include "tracking/tag_detector.hpp"
 
 namespace probelight::tracking {
@@ -101,6 +102,9 @@ struct TagTrackResult {
   // made by nearness to the previous frame's pose (or by error alone on a
   // first frame).
   bool pose_ambiguous = false;
+  // The tag had not moved since a recent frame (RefinementReuse): its
+  // corner refinement and pose polish were kept, not redone.
+  bool refinement_reused = false;
 };
 
 // Detector + pose + temporal consistency for one rig. Not thread-safe: call
@@ -124,10 +128,7 @@ class TagTracker {
   void seed(const PoseCamFromWorld& pose);
 
   // Forget the pose history (e.g. after the camera was moved by hand).
-  void resetHistory() {
-    flip_resolver_.reset();
-    last_printed_corners_px_.reset();
-  }
+  void resetHistory();
 
   const RigGeometry& rig() const { return rig_; }
   const CameraIntrinsics& camera() const { return camera_; }
@@ -138,6 +139,12 @@ class TagTracker {
   RigGeometry rig_;
   CameraIntrinsics camera_;
   PoseFlipResolver flip_resolver_;
+  // The last refinement and polish, kept while the tag stays still.
+  struct RefinedTagPose {
+    std::array<glm::dvec2, 4> corners_px{};
+    std::vector<TagPoseSolution> solutions;  // polished, best first
+  };
+  RefinementReuse<RefinedTagPose> refinement_reuse_;
   // Where the printed tag (white ring included) was when last found, how
   // fast its corners moved then (px per frame), and how many frames ago: to
   // tell a tag that is leaving the frame from one that is simply absent.
