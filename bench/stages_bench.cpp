@@ -13,6 +13,7 @@
 // Map benchmarks use the simulator's true pose, so tracking error is not mixed
 // into the map error; detect_pose measures the tracking error on its own.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -51,6 +52,8 @@
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
 #include "tracking/tag_tracker.hpp"
+
+#include "stage_limits.hpp"
 
 namespace probelight::bench {
 namespace {
@@ -833,6 +836,242 @@ void cpuBlurPass(benchmark::State& state, int input_face_size, int output_face_s
 }
 
 // ---------------------------------------------------------------------------
+// 5. Each stage against its limit (stage_limits.hpp), at the shipped
+//    defaults, stage then limit back to back in one run: per-iteration
+//    times, glFinish included, whose medians make the ratio.
+
+std::map<std::string, std::vector<double>>& ratioSamples() {
+  static std::map<std::string, std::vector<double>> samples;
+  return samples;
+}
+
+// Runs `body` once per iteration, timing each (its glFinish included).
+template <typename Body>
+void timeIterations(benchmark::State& state, const std::string& key, Body body) {
+  std::vector<double>& samples = ratioSamples()[key];
+  std::string error;
+  // Once untimed: llvmpipe compiles a shader at its first draw.
+  if (!body(error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    if (!body(error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    samples.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
+}
+
+std::string ratioKey(const std::string& stage, bool limit) { return stage + (limit ? "/limit" : ""); }
+
+// A still camera: frames of the simulator's static path, each with its own
+// sensor noise, for the tracker's still case.
+const std::vector<Frame>& stillFrames() {
+  static const std::vector<Frame> frames = [] {
+    Setup& s = setup();
+    sim::SceneConfig scene = s.scene;
+    scene.camera_path.name = "static";
+    sim::World world(scene);
+    std::vector<Frame> out;
+    for (std::uint64_t index = 0; index < 10; ++index) {
+      Frame frame;
+      frame.index = index;
+      world.render(index, frame.rgb, frame.truth);
+      lumaFromRgb(frame.rgb, frame.luma);
+      out.push_back(std::move(frame));
+    }
+    return out;
+  }();
+  return frames;
+}
+
+// detect_pose's limit: the detector and the planar pose alone (no corner
+// refinement, no polish), on the same frames in the same order.
+void ratioDetectPose(benchmark::State& state, bool still, bool limit) {
+  Setup& s = setup();
+  const std::vector<Frame>& frames = still ? stillFrames() : s.consecutive_frames;
+  tracking::TagDetectorSettings settings;
+  settings.family = s.scene.rig.tag_family;
+  settings.refine_corners = !limit;
+  tracking::TagTracker tracker(settings, s.scene.rig, s.scene.camera);
+  std::size_t next = 0;
+  timeIterations(state, ratioKey(still ? "detect_pose (still)" : "detect_pose (moving)", limit), [&](std::string& error) {
+    if (next == 0) tracker.resetHistory();
+    const Frame& frame = frames[next];
+    const tracking::TagTrackResult result = tracker.track(frame.luma.data(), frame.rgb.width, frame.rgb.height, frame.rgb.width);
+    next = (next + 1) % frames.size();
+    if (!result.found) error = "tag not found: " + result.status;
+    return result.found;
+  });
+}
+
+// upload's limit: glTexSubImage2D of the same bytes into a texture of the same size.
+void ratioUpload(benchmark::State& state, bool limit) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  passes::CameraFrameTexture texture;
+  std::string error;
+  const ImageRGB8& image = s.frames[0].rgb;
+  if (!texture.init(s.capabilities_full, error) || !texture.upload(image, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  timeIterations(state, ratioKey("upload", limit), [&](std::string& e) {
+    if (limit) {
+      glBindTexture(GL_TEXTURE_2D, texture.texture());
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, image.width, image.height, GL_RGB, GL_UNSIGNED_BYTE, image.pixels.data());
+      glBindTexture(GL_TEXTURE_2D, 0);
+    } else if (!texture.upload(image, e)) {
+      return false;
+    }
+    glFinish();
+    return true;
+  });
+}
+
+void ratioProbeToCube(benchmark::State& state, bool limit) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  std::string error;
+  FrameTextures frames;
+  passes::EnvironmentMaps maps;
+  {
+    TrivialShaderScope trivial(limit);
+    if (!frames.init(s.capabilities_full, error) || !maps.init(s.capabilities_full, {}, error)) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+  }
+  timeIterations(state, ratioKey("probe_to_cube", limit), [&](std::string& e) {
+    const bool ok = maps.updateReflection(*frames.textures[0], s.frames[0].view, s.scene.rig.probe_reflectance, e);
+    glFinish();
+    return ok;
+  });
+}
+
+void ratioDiffuse(benchmark::State& state, bool limit) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  std::string error;
+  FrameTextures frames;
+  passes::EnvironmentMaps maps;
+  {
+    TrivialShaderScope trivial(limit, "cosine_irradiance.frag");
+    if (!frames.init(s.capabilities_full, error) || !maps.init(s.capabilities_full, {}, error) ||
+        !maps.updateReflection(*frames.textures[0], s.frames[0].view, s.scene.rig.probe_reflectance, error)) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+  }
+  glFinish();
+  timeIterations(state, ratioKey("diffuse_blur", limit), [&](std::string& e) {
+    const bool ok = maps.updateDiffuse(e);
+    glFinish();
+    return ok;
+  });
+}
+
+// The frame as the kiosk draws it: the background, the shadow's cells and
+// the sphere (render), and the ground shadow's update on its own (shadows).
+void ratioRender(benchmark::State& state, bool limit) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  std::string error;
+  RenderRig rig;
+  ShadowRig shadow_rig;
+  passes::GroundShadow shadow;
+  if (!rig.init(error) || !shadow_rig.init(error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  const std::vector<ibl::ShadowLight> lights =
+      ibl::groundShadowLights(ibl::fitLightDome(*shadow_rig.reflection, &shadow_rig.validity));
+  passes::ObjectCompositor compositor;
+  {
+    // The shadow's own passes stay real (its cells are the real ones); the
+    // frame's three draws get the trivial shaders.
+    TrivialShaderScope trivial_composite(limit, "ground_composite.frag");
+    if (!shadow.init(s.capabilities_full, {}, error) || !shadow.update(lights, benchCaster(), error)) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+  }
+  {
+    TrivialShaderScope trivial(limit);
+    if (!compositor.init(s.capabilities_full, {}, rig.maps.storage(), error)) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+  }
+  ibl::SurfaceMaterial material;
+  material.albedo = glm::vec3(0.8f);
+  material.k_specular = 0.25f;
+  material.shininess = 48.0f;
+  material.k_reflect = 0.08f;
+  const PoseCamFromWorld& pose = s.frames[0].truth.pose;
+  const ibl::ShadowCaster caster = benchCaster();
+  timeIterations(state, ratioKey("render", limit), [&](std::string& e) {
+    rig.target.bind();
+    compositor.drawCameraBackground(*rig.frames.textures[0]);
+    const bool ok = shadow.drawOnCameraImage(s.scene.camera, pose, *rig.frames.textures[0], e) &&
+                    compositor.drawSphereObject(s.scene.camera, pose,
+                                                glm::dvec3(caster.position_w, caster.radius_m), caster.radius_m,
+                                                material, ibl::SceneLighting{}, rig.maps, e);
+    glFinish();
+    return ok;
+  });
+}
+
+void ratioShadows(benchmark::State& state, bool limit) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  std::string error;
+  ShadowRig rig;
+  if (!rig.init(error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  const std::vector<ibl::ShadowLight> lights = ibl::groundShadowLights(ibl::fitLightDome(*rig.reflection, &rig.validity));
+  passes::GroundShadow shadow;
+  {
+    TrivialShaderScope trivial(limit);
+    if (!shadow.init(s.capabilities_full, {}, error)) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+  }
+  timeIterations(state, ratioKey("shadows", limit), [&](std::string& e) {
+    const bool ok = shadow.update(lights, benchCaster(), e);
+    glFinish();
+    return ok;
+  });
+}
+
+double medianOf(std::vector<double> values) {
+  if (values.empty()) return NAN;
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+void printRatioTable() {
+  if (ratioSamples().empty()) return;
+  std::printf("\nEach stage against its limit (the same passes with trivial shaders of as many texture reads;\n"
+              "detect_pose: the detector and the planar pose without refinement; upload: glTexSubImage2D alone).\n"
+              "Medians of per-iteration times, glFinish included, stage and limit back to back in this run:\n");
+  std::printf("  %-22s %10s %10s %8s\n", "stage", "ms", "limit ms", "ratio");
+  for (const char* stage : {"upload", "detect_pose (still)", "detect_pose (moving)", "probe_to_cube", "diffuse_blur",
+                            "render", "shadows"}) {
+    const auto own = ratioSamples().find(stage), limit = ratioSamples().find(std::string(stage) + "/limit");
+    if (own == ratioSamples().end() || limit == ratioSamples().end()) continue;
+    const double ms = medianOf(own->second), limit_ms = medianOf(limit->second);
+    std::printf("  %-22s %10.2f %10.2f %7.2fx\n", stage, ms, limit_ms, ms / limit_ms);
+  }
+}
 
 void printErrorTable() {
   if (errorTable().empty()) return;
@@ -952,6 +1191,23 @@ void registerAll() {
       ->UseRealTime()
       ->MinTime(kMinTime);
 
+  // Stage, then its limit, for each stage (printRatioTable).
+  const std::pair<const char*, std::function<void(benchmark::State&, bool)>> ratio_stages[] = {
+      {"upload", ratioUpload},
+      {"detect_pose/still", [](benchmark::State& state, bool limit) { ratioDetectPose(state, true, limit); }},
+      {"detect_pose/moving", [](benchmark::State& state, bool limit) { ratioDetectPose(state, false, limit); }},
+      {"probe_to_cube", ratioProbeToCube},
+      {"diffuse_blur", ratioDiffuse},
+      {"render", ratioRender},
+      {"shadows", ratioShadows}};
+  for (const auto& [stage, run] : ratio_stages)
+    for (bool limit : {false, true})
+      benchmark::RegisterBenchmark((std::string("ratio/") + stage + (limit ? "/limit" : "")).c_str(),
+                                   [run = run, limit](benchmark::State& state) { run(state, limit); })
+          ->Unit(kMillisecond)
+          ->UseRealTime()
+          ->MinTime(0.5);
+
   benchmark::RegisterBenchmark("cpu/probe_to_cube/face:64", [](benchmark::State& state) { cpuProbeToCube(state, 64); })
       ->Unit(kMillisecond)
       ->MinTime(kMinTime);
@@ -972,5 +1228,6 @@ int main(int argc, char** argv) {
   benchmark::Shutdown();
   std::fflush(stdout);
   probelight::bench::printErrorTable();
+  probelight::bench::printRatioTable();
   return 0;
 }

@@ -14,8 +14,13 @@
 # in interleaved rounds and the table gives each one's median over the rounds
 # with the per-stage medians (ms) of its median round.
 #
+# Then each stage against its limit (probelight_bench's ratio/ benchmarks,
+# bench/stage_limits.hpp: the same passes with trivial shaders of as many
+# texture reads), stage and limit back to back.
+#
 # usage: scripts/bench-pipeline.sh [ROUNDS] [OUT.csv]
 #   PROBELIGHT=path/to/probelight (default build/probelight)
+#   PROBELIGHT_BENCH=path/to/probelight_bench (default build/probelight_bench; absent: no ratios)
 #   FRAMES=frames per replayed run (default 600)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -79,3 +84,10 @@ if csv_path:
         for row in rows:
             f.write(",".join(row) + "\n")
 EOF
+
+bench=${PROBELIGHT_BENCH:-build/probelight_bench}
+if [[ -x $bench ]]; then
+  "$bench" --benchmark_filter='^ratio/' 2>/dev/null | sed -n '/^Each stage against its limit/,$p'
+else
+  echo "bench-pipeline: $bench not built: no stage ratios (scripts/build.sh probelight_bench)" >&2
+fi

@@ -255,6 +255,17 @@ std::optional<Program> Program::fromSources(std::string_view vertex_name, std::s
   return program;
 }
 
+namespace {
+FragmentShaderSubstitute& fragmentShaderSubstitute() {
+  static FragmentShaderSubstitute substitute;
+  return substitute;
+}
+}  // namespace
+
+void setFragmentShaderSubstitute(FragmentShaderSubstitute substitute) {
+  fragmentShaderSubstitute() = std::move(substitute);
+}
+
 std::optional<Program> Program::fromEmbedded(std::string_view vertex_file, std::string_view fragment_file,
                                              std::string_view defines, std::string& error) {
   const auto& shaders = embeddedShaders();
@@ -267,6 +278,9 @@ std::optional<Program> Program::fromEmbedded(std::string_view vertex_file, std::
       return std::nullopt;
     }
   }
+  if (const FragmentShaderSubstitute& substitute = fragmentShaderSubstitute())
+    if (std::optional<std::string> replaced = substitute(fragment_file, defines, fragment->second))
+      return fromSources(vertex_file, vertex->second, fragment_file, *replaced, defines, error);
   return fromSources(vertex_file, vertex->second, fragment_file, fragment->second, defines, error);
 }
 

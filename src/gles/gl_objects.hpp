@@ -2,6 +2,7 @@
 // must be created and destroyed with the owning context current.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -86,6 +87,16 @@ std::optional<Texture> createCubeTexture(int face_size, GLenum format, GLenum ty
 
 // Describes why a framebuffer is incomplete, e.g. "GL_FRAMEBUFFER_UNSUPPORTED".
 std::string framebufferStatusName(GLenum status);
+
+// For benchmarks only: while set, every program built from embedded files
+// gets this function's fragment shader instead of its own, when it returns
+// one (it is given the file's name, the defines and the file's source). The
+// bench uses it for a stage's limit: the same passes, targets and draws with
+// a trivial shader that makes as many texture reads.
+using FragmentShaderSubstitute =
+    std::function<std::optional<std::string>(std::string_view fragment_file, std::string_view defines,
+                                             std::string_view source)>;
+void setFragmentShaderSubstitute(FragmentShaderSubstitute substitute);
 
 // A linked vertex + fragment program. Sources are the embedded files of
 // shaders-gles/; a line `#include "name.glsl"` pulls in another embedded file.

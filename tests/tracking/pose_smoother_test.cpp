@@ -127,12 +127,16 @@ double stddev3(const std::vector<glm::dvec3>& v) {
 
 // Tracks `frames` frames of `path`, raw and smoothed, from frame `skip` on
 // (the smoother's first frames are its warm-up).
-void trackSequence(const std::string& path, int frames, int skip, Series& raw, Series& smoothed) {
+// refinement_reuse_px: the tracker's (tracking/refinement_reuse.hpp); 0
+// refines every frame, so the raw poses carry each frame's own noise.
+void trackSequence(const std::string& path, int frames, int skip, Series& raw, Series& smoothed,
+                   double refinement_reuse_px = 0.0) {
   sim::SceneConfig scene = sim::defaultScene();
   scene.camera_path.name = path;
   sim::World world(scene);
   tracking::TagDetectorSettings detector;
   detector.family = scene.rig.tag_family;
+  detector.refinement_reuse_px = refinement_reuse_px;
   tracking::TagTracker tracker(detector, scene.rig, scene.camera);
   tracking::PoseSmoother smoother({}, scene.camera, tracking::smoothingReferencePoints(scene.rig));
   std::vector<std::uint8_t> luma;
@@ -183,6 +187,20 @@ TEST(PoseSmoother, CutsJitterOnAStaticNoisySequence) {
   EXPECT_LT(smooth_centre, 0.5 * raw_centre);
   EXPECT_LT(smooth_rotation, 0.5 * raw_rotation);
   EXPECT_LT(smooth_position, 0.5 * raw_position);
+
+  // With the shipped refinement reuse the raw pose holds one refinement's
+  // pose between refinements (at most 30 frames apart) and steps by that
+  // refinement's noise at each new one: steps too slow for the low-pass to
+  // average, so the smoothed pose keeps about one refinement's scatter. It
+  // must stay no worse than refining every frame with no smoothing at all
+  // (raw_centre), and far inside the smoother's on-screen lag budget.
+  Series raw_reused, smoothed_reused;
+  trackSequence("static", 75, 15, raw_reused, smoothed_reused, tracking::TagDetectorSettings{}.refinement_reuse_px);
+  const double reused_centre = stddev2(smoothed_reused.centre_px);
+  std::printf("[ jitter   ] static with refinement reuse: ball centre std raw %.4f px, smoothed %.4f px\n",
+              stddev2(raw_reused.centre_px), reused_centre);
+  EXPECT_LT(reused_centre, raw_centre);
+  EXPECT_LT(reused_centre, 0.25 * tracking::PoseSmoothingSettings{}.max_lag_px);
 }
 
 TEST(PoseSmoother, KeepsTheAccuracyTargetsOnTheMovingOrbit) {
