@@ -33,12 +33,7 @@ frames=${FRAMES:-600}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-# One simulated frame, kept raw (with its camera.yaml and rig.yaml), then the
-# same frame as PPM under many names.
-"$probelight" run --source sim --frames 1 --save-every 0 --quiet --out "$work/still" --capture "$work/capture" >/dev/null
-python3 scripts/png_to_ppm.py "$work/capture/frame.png" "$work/frame.ppm"
-mkdir "$work/replay"
-for ((i = 0; i < frames; ++i)); do ln -s "$work/frame.ppm" "$(printf '%s/replay/f_%06d.ppm' "$work" "$i")"; done
+scripts/replay-frames.sh "$probelight" "$work" "$frames"
 
 printf '%%YAML:1.0\n---\nmap_updates:\n  max_age_frames: 1\n' >"$work/maps.yaml"
 printf '%%YAML:1.0\n---\nmap_updates:\n  max_age_frames: 1\nlights:\n  shadow_updates: every_frame\n' >"$work/maps_shadows.yaml"
