@@ -13,12 +13,6 @@
 namespace probelight::passes {
 
 namespace {
-// The rungs the object reads: the glossy levels only once updateGlossy has
-// made them (otherwise the ladder is mirror -> diffuse).
-ReflectionRungs rungsFor(const ibl::SurfaceMaterial& material, const EnvironmentMaps& environment) {
-  return reflectionRungsFor(material.glossiness, environment.glossyWritten() ? environment.glossyLevels() : 0);
-}
-
 // The bound 2D texture's minification and magnification filter.
 void setTextureFilter(GLint filter) {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
@@ -151,14 +145,21 @@ void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_fra
   setTextureFilter(GL_LINEAR);
 }
 
-bool ObjectCompositor::prepareShading(const gles::Program& program, const CameraIntrinsics& camera,
-                                      const PoseCamFromWorld& pose, const ibl::SurfaceMaterial& material,
-                                      const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
-                                      std::string& error) {
+const gles::Program* ObjectCompositor::prepareShading(ObjectShape shape, const CameraIntrinsics& camera,
+                                                     const PoseCamFromWorld& pose, const ibl::SurfaceMaterial& material,
+                                                     const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
+                                                     std::string& error) {
   if (environment.storage() != storage_) {
     error = "ObjectCompositor: initialised for a different cube map storage than these EnvironmentMaps use";
-    return false;
+    return nullptr;
   }
+  // Glossy levels only when updateGlossy has made them; otherwise the ladder
+  // is mirror -> diffuse.
+  const int glossy_levels = environment.glossyWritten() ? environment.glossyLevels() : 0;
+  const ReflectionRungs rungs = reflectionRungsFor(material.glossiness, glossy_levels);
+  const gles::Program* shading = shadingProgram(shape, rungs, error);
+  if (shading == nullptr) return nullptr;
+  const gles::Program& program = *shading;
   const GpuCubeMap& diffuse = environment.diffuse();
   const GpuCubeMap& reflection = environment.reflection();
   const glm::vec3 eye_w(pose.cameraCenterWorld());
@@ -189,10 +190,8 @@ bool ObjectCompositor::prepareShading(const gles::Program& program, const Camera
   glUniform1i(program.uniform("u_reflection_map"), 1);
   glUniform1f(program.uniform("u_reflection_face_size"), static_cast<float>(reflection.face_size));
   glUniform1f(program.uniform("u_reflection_scale"), reflection.linear_scale);
-  // Glossy levels only when updateGlossy has made them; otherwise the ladder
-  // is mirror -> diffuse. Absent levels' samplers get the diffuse map (a
-  // complete cube map; the shader never reads them).
-  const int glossy_levels = environment.glossyWritten() ? environment.glossyLevels() : 0;
+  // Absent glossy levels' samplers get the diffuse map (a complete cube
+  // map; the shader never reads them).
   for (int level = 0; level < 2; ++level) {
     const std::string name = "u_glossy" + std::to_string(level);
     const GpuCubeMap& map = level < glossy_levels ? environment.glossy(level) : diffuse;
@@ -202,7 +201,7 @@ bool ObjectCompositor::prepareShading(const gles::Program& program, const Camera
     glUniform1f(program.uniform((name + "_face_size").c_str()), static_cast<float>(map.face_size));
     glUniform1f(program.uniform((name + "_scale").c_str()), map.linear_scale);
   }
-  glUniform1f(program.uniform("u_toward_upper_rung"), reflectionRungsFor(material.glossiness, glossy_levels).toward_upper);
+  glUniform1f(program.uniform("u_toward_upper_rung"), rungs.toward_upper);
   glActiveTexture(GL_TEXTURE0);
 
   glUniform3fv(program.uniform("u_albedo"), 1, glm::value_ptr(material.albedo));
@@ -234,17 +233,16 @@ bool ObjectCompositor::prepareShading(const gles::Program& program, const Camera
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   glFrontFace(GL_CCW);
-  return true;
+  return shading;
 }
 
 bool ObjectCompositor::drawSphereObject(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                                         glm::dvec3 centre_w, double radius_m, const ibl::SurfaceMaterial& material,
                                         const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
                                         std::string& error) {
-  const gles::Program* shading = shadingProgram(ObjectShape::kSphere, rungsFor(material, environment), error);
+  const gles::Program* shading = prepareShading(ObjectShape::kSphere, camera, pose, material, lighting, environment, error);
   if (shading == nullptr) return false;
   const gles::Program& program = *shading;
-  if (!prepareShading(program, camera, pose, material, lighting, environment, error)) return false;
   glUniform3f(program.uniform("u_center_w"), static_cast<float>(centre_w.x), static_cast<float>(centre_w.y),
               static_cast<float>(centre_w.z));
   glUniform1f(program.uniform("u_radius_m"), static_cast<float>(radius_m));
@@ -278,10 +276,9 @@ bool ObjectCompositor::drawMeshObject(const CameraIntrinsics& camera, const Pose
                                       const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
                                       std::string& error) {
   if (triangles.empty()) return true;
-  const gles::Program* shading = shadingProgram(ObjectShape::kMesh, rungsFor(material, environment), error);
+  const gles::Program* shading = prepareShading(ObjectShape::kMesh, camera, pose, material, lighting, environment, error);
   if (shading == nullptr) return false;
   const gles::Program& program = *shading;
-  if (!prepareShading(program, camera, pose, material, lighting, environment, error)) return false;
   if (!mesh_vertices_.valid()) mesh_vertices_ = gles::Buffer::create();
   glBindBuffer(GL_ARRAY_BUFFER, mesh_vertices_.id());
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(triangles.size() * sizeof(MeshVertex)), triangles.data(),

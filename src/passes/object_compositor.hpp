@@ -81,14 +81,16 @@ class ObjectCompositor {
   bool drawOverlayRGBA(const std::uint8_t* rgba, int width, int height, std::string& error);
 
  private:
-  // Uniforms, textures and state shared by the object programs.
-  bool prepareShading(const gles::Program& program, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
-                      const ibl::SurfaceMaterial& material, const ibl::SceneLighting& lighting,
-                      EnvironmentMaps& environment, std::string& error);
+  enum class ObjectShape { kSphere, kMesh };
+  // The shape's program for this material's rungs, in use, with the
+  // uniforms, textures and state shared by the object programs; null on
+  // failure (error says why).
+  const gles::Program* prepareShading(ObjectShape shape, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
+                                      const ibl::SurfaceMaterial& material, const ibl::SceneLighting& lighting,
+                                      EnvironmentMaps& environment, std::string& error);
 
   // The shading program for a shape and the ladder's rungs
   // (reflectionRungsFor), built on first use and kept.
-  enum class ObjectShape { kSphere, kMesh };
   const gles::Program* shadingProgram(ObjectShape shape, const ReflectionRungs& rungs, std::string& error);
 
   ObjectCompositorSettings settings_;

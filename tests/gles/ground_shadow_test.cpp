@@ -267,37 +267,50 @@ TEST(ShadowFootprint, HoldsEveryGroundPointTheLightsConeCanHide) {
   EXPECT_GT(hidden_points, 10000);
 }
 
+// A uniform floor of sRGB code 180 seen by the test camera, and the passes
+// that draw the shadow over it: init(), then shadow.update(...), then
+// composite(pose) gives the frame.
+struct GreyFloorComposite {
+  const CameraIntrinsics camera = test::testCamera();
+  passes::CameraFrameTexture texture;
+  passes::ObjectCompositor compositor;
+  passes::GroundShadow shadow;
+  gles::RenderTarget target;
+  bool init(std::string& error) {
+    ImageRGB8 frame;
+    frame.resize(camera.width_px, camera.height_px);
+    std::fill(frame.pixels.begin(), frame.pixels.end(), std::uint8_t{180});
+    return texture.init(test::sharedCapabilities(), error) && texture.upload(frame, error) &&
+           compositor.init(test::sharedCapabilities(), {}, passes::CubeStorage::kSrgb8, error) &&
+           shadow.init(test::sharedCapabilities(), {}, error) &&
+           target.init(camera.width_px, camera.height_px, error);
+  }
+  bool composite(const PoseCamFromWorld& pose, ImageRGB8& out, std::string& error) {
+    target.bind();
+    compositor.drawCameraBackground(texture);
+    return shadow.drawOnCameraImage(camera, pose, texture, error) && target.readRGB(out, error);
+  }
+};
+
 // The composite: a uniform floor of sRGB code 180 under an overhead light
 // that carries half the ground's light, with a sphere: under it the floor
 // must read encode(0.5 decode(180)), away from it 180, and pixels the ground
 // square does not cover are untouched.
 TEST_F(GpuTest, CompositeDarkensTheCameraPixelsByTheFractionInLinearLight) {
   std::string error;
-  const CameraIntrinsics camera = test::testCamera();
+  GreyFloorComposite floor;
+  ASSERT_TRUE(floor.init(error)) << error;
+  const CameraIntrinsics& camera = floor.camera;
+  passes::GroundShadow& shadow = floor.shadow;
   const PoseCamFromWorld pose = test::lookAt({0.0, -0.35, 0.45}, {0.0, 0.0, 0.0});
-  ImageRGB8 frame;
-  frame.resize(camera.width_px, camera.height_px);
-  std::fill(frame.pixels.begin(), frame.pixels.end(), std::uint8_t{180});
-  passes::CameraFrameTexture texture;
-  ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
-  ASSERT_TRUE(texture.upload(frame, error)) << error;
-  passes::ObjectCompositor compositor;
-  ASSERT_TRUE(compositor.init(test::sharedCapabilities(), {}, passes::CubeStorage::kSrgb8, error)) << error;
-  passes::GroundShadow shadow;
-  ASSERT_TRUE(shadow.init(test::sharedCapabilities(), {}, error)) << error;
   ibl::ShadowLight overhead;
   overhead.direction_w = {0, 0, 1};
   overhead.share_rgb = glm::dvec3(0.5);
   ibl::ShadowCaster sphere;
   sphere.radius_m = 0.04;
   ASSERT_TRUE(shadow.update({overhead}, sphere, error)) << error;
-  gles::RenderTarget target;
-  ASSERT_TRUE(target.init(camera.width_px, camera.height_px, error)) << error;
-  target.bind();
-  compositor.drawCameraBackground(texture);
-  ASSERT_TRUE(shadow.drawOnCameraImage(camera, pose, texture, error)) << error;
   ImageRGB8 out;
-  ASSERT_TRUE(target.readRGB(out, error)) << error;
+  ASSERT_TRUE(floor.composite(pose, out, error)) << error;
   const double expected_code = 255.0 * ibl::linearToSrgb(0.5 * ibl::srgbToLinear(180.0 / 255.0));
   // Where the centre of the disc under the sphere, and a point of the
   // square well outside the disc (0.8 r from a corner), land in the image.
@@ -327,19 +340,12 @@ TEST_F(GpuTest, CompositeDarkensTheCameraPixelsByTheFractionInLinearLight) {
 // room's dome casts several long streaks, so whole cells are skipped.
 TEST_F(GpuTest, CompositeOfTheDarkenedCellsIsTheFullCompositeEverywhere) {
   std::string error;
-  const CameraIntrinsics camera = test::testCamera();
+  GreyFloorComposite floor;
+  ASSERT_TRUE(floor.init(error)) << error;
+  const CameraIntrinsics& camera = floor.camera;
+  passes::GroundShadow& shadow = floor.shadow;
+  const passes::GroundShadowSettings settings;  // what init() gave it
   const PoseCamFromWorld pose = test::lookAt({0.05, -0.4, 0.5}, {0.0, 0.0, 0.0});
-  ImageRGB8 frame;
-  frame.resize(camera.width_px, camera.height_px);
-  std::fill(frame.pixels.begin(), frame.pixels.end(), std::uint8_t{180});
-  passes::CameraFrameTexture texture;
-  ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
-  ASSERT_TRUE(texture.upload(frame, error)) << error;
-  passes::ObjectCompositor compositor;
-  ASSERT_TRUE(compositor.init(test::sharedCapabilities(), {}, passes::CubeStorage::kSrgb8, error)) << error;
-  passes::GroundShadow shadow;
-  const passes::GroundShadowSettings settings;
-  ASSERT_TRUE(shadow.init(test::sharedCapabilities(), settings, error)) << error;
   ibl::ShadowCaster sphere;
   sphere.radius_m = 0.035;
   ASSERT_TRUE(shadow.update(roomLights(), sphere, error)) << error;
@@ -352,13 +358,8 @@ TEST_F(GpuTest, CompositeOfTheDarkenedCellsIsTheFullCompositeEverywhere) {
   EXPECT_GT(drawn, 0);
   EXPECT_LT(drawn, static_cast<long>(cells.size()) * 3 / 4) << "the streaks leave most cells out";
 
-  gles::RenderTarget target;
-  ASSERT_TRUE(target.init(camera.width_px, camera.height_px, error)) << error;
-  target.bind();
-  compositor.drawCameraBackground(texture);
-  ASSERT_TRUE(shadow.drawOnCameraImage(camera, pose, texture, error)) << error;
   ImageRGB8 out;
-  ASSERT_TRUE(target.readRGB(out, error)) << error;
+  ASSERT_TRUE(floor.composite(pose, out, error)) << error;
   const double linear_180 = ibl::srgbToLinear(180.0 / 255.0);
   int checked = 0, darkened = 0, outside_bounds = 0;
   for (int j = 1; j + 1 < n; ++j)
