@@ -79,17 +79,50 @@ void refineOnEdgePoints(std::vector<TagPoseSolution>& solutions, const std::arra
           ? rotationDifferenceDeg(solutions[0].pose.R_cam_from_world, solutions[1].pose.R_cam_from_world)
           : 0.0;
   const double half = tag_size_m / 2.0;
-  auto residuals = [&](const glm::dmat3& R, const glm::dvec3& t, std::vector<double>& out) {
-    out.resize(points.size());
+  // Residual i: the signed distance (px, undistorted) of edge point u from
+  // the line through the projections a, b of its segment's ends, r =
+  // cross(u - a, e) / |e| with e = b - a. Its gradient in the 6 parameters
+  // (a small rotation w applied on the left in the camera frame, then t)
+  // is analytic: with s = u - a, L = |e|, n_e = (e.y, -e.x), m_s = (-s.y, s.x),
+  //   dr = da . ((-n_e - m_s) / L + r e / L^2) + db . (m_s / L - r e / L^2),
+  // and a point X_c = R X + t moves by -[R X]x dw + dt, projected through the
+  // pinhole's Jacobian. One pass over the points gives r and J (a numerical
+  // Jacobian took 7).
+  auto residualsAndJacobian = [&](const glm::dmat3& R, const glm::dvec3& t, std::vector<double>& r,
+                                  std::vector<std::array<double, 6>>& jacobian) {
+    r.resize(points.size());
+    jacobian.resize(points.size());
     for (std::size_t i = 0; i < points.size(); ++i) {
-      auto project = [&](glm::dvec2 q) {
-        glm::dvec3 c = R * glm::dvec3(q.x * half, q.y * half, 0.0) + t;
-        return glm::dvec2(camera.fx_px * c.x / c.z + camera.cx_px, camera.fy_px * c.y / c.z + camera.cy_px);
+      struct Projected {
+        glm::dvec2 pixel;
+        std::array<glm::dvec2, 6> d;  // d pixel / d parameter
       };
-      glm::dvec2 a = project(points[i].segment_a), b = project(points[i].segment_b);
-      glm::dvec2 d = glm::normalize(b - a);
-      glm::dvec2 r = points[i].undistorted_px - a;
-      out[i] = r.x * d.y - r.y * d.x;
+      auto project = [&](glm::dvec2 q) {
+        const glm::dvec3 rotated = R * glm::dvec3(q.x * half, q.y * half, 0.0);
+        const glm::dvec3 c = rotated + t;
+        Projected out;
+        out.pixel = glm::dvec2(camera.fx_px * c.x / c.z + camera.cx_px, camera.fy_px * c.y / c.z + camera.cy_px);
+        // d pixel / d c (2 x 3), then d c / d w = -[rotated]x and d c / d t = I.
+        const glm::dvec3 du(camera.fx_px / c.z, 0.0, -camera.fx_px * c.x / (c.z * c.z));
+        const glm::dvec3 dv(0.0, camera.fy_px / c.z, -camera.fy_px * c.y / (c.z * c.z));
+        for (int k = 0; k < 3; ++k) {
+          glm::dvec3 axis(0.0);
+          axis[k] = 1.0;
+          const glm::dvec3 dc_dw = glm::cross(axis, rotated);  // d (w x rotated) / d w_k
+          out.d[static_cast<std::size_t>(k)] = glm::dvec2(glm::dot(du, dc_dw), glm::dot(dv, dc_dw));
+          out.d[static_cast<std::size_t>(k + 3)] = glm::dvec2(du[k], dv[k]);
+        }
+        return out;
+      };
+      const Projected a = project(points[i].segment_a), b = project(points[i].segment_b);
+      const glm::dvec2 e = b.pixel - a.pixel, s = points[i].undistorted_px - a.pixel;
+      const double length = glm::length(e);
+      const double residual = (s.x * e.y - s.y * e.x) / length;
+      const glm::dvec2 n_e(e.y, -e.x), m_s(-s.y, s.x);
+      const glm::dvec2 ga = (-n_e - m_s) / length + residual * e / (length * length);
+      const glm::dvec2 gb = m_s / length - residual * e / (length * length);
+      r[i] = residual;
+      for (std::size_t p = 0; p < 6; ++p) jacobian[i][p] = glm::dot(ga, a.d[p]) + glm::dot(gb, b.d[p]);
     }
   };
   auto rotationFromVector = [](const glm::dvec3& w) {
@@ -104,33 +137,26 @@ void refineOnEdgePoints(std::vector<TagPoseSolution>& solutions, const std::arra
   for (TagPoseSolution& solution : solutions) {
     glm::dmat3 R = solution.pose.R_cam_from_world;
     glm::dvec3 t = solution.pose.t_cam_from_world;
-    std::vector<double> r, r_step;
+    std::vector<double> r;
+    std::vector<std::array<double, 6>> jacobian;
     for (int iteration = 0; iteration < 6; ++iteration) {
-      residuals(R, t, r);
-      // Parameters: a small rotation applied on the left (camera frame), then t.
-      cv::Mat JtJ = cv::Mat::zeros(6, 6, CV_64F), Jtr = cv::Mat::zeros(6, 1, CV_64F);
-      std::vector<std::vector<double>> columns(6);
-      for (int p = 0; p < 6; ++p) {
-        double h = p < 3 ? 1e-6 : 1e-6 * std::max(1e-3, glm::length(t));
-        glm::dvec3 delta(0.0);
-        delta[p % 3] = h;
-        if (p < 3) residuals(rotationFromVector(delta) * R, t, r_step);
-        else residuals(R, t + delta, r_step);
-        columns[static_cast<std::size_t>(p)].resize(r.size());
-        for (std::size_t i = 0; i < r.size(); ++i) columns[static_cast<std::size_t>(p)][i] = (r_step[i] - r[i]) / h;
-      }
+      residualsAndJacobian(R, t, r, jacobian);
+      cv::Matx66d JtJ = cv::Matx66d::zeros();
+      cv::Vec6d Jtr = cv::Vec6d::all(0.0);
       for (std::size_t i = 0; i < r.size(); ++i) {
-        double weight = std::abs(r[i]) <= kHuberPx ? 1.0 : kHuberPx / std::abs(r[i]);
+        const double weight = std::abs(r[i]) <= kHuberPx ? 1.0 : kHuberPx / std::abs(r[i]);
         for (int p = 0; p < 6; ++p) {
-          Jtr.at<double>(p) += weight * columns[static_cast<std::size_t>(p)][i] * r[i];
-          for (int q = 0; q < 6; ++q)
-            JtJ.at<double>(p, q) += weight * columns[static_cast<std::size_t>(p)][i] * columns[static_cast<std::size_t>(q)][i];
+          const double wj = weight * jacobian[i][static_cast<std::size_t>(p)];
+          Jtr(p) += wj * r[i];
+          for (int q = p; q < 6; ++q) JtJ(p, q) += wj * jacobian[i][static_cast<std::size_t>(q)];
         }
       }
-      cv::Mat step;
+      for (int p = 0; p < 6; ++p)
+        for (int q = 0; q < p; ++q) JtJ(p, q) = JtJ(q, p);
+      cv::Vec6d step;
       if (!cv::solve(JtJ, -Jtr, step, cv::DECOMP_CHOLESKY)) break;
-      glm::dvec3 dw(step.at<double>(0), step.at<double>(1), step.at<double>(2));
-      glm::dvec3 dt(step.at<double>(3), step.at<double>(4), step.at<double>(5));
+      glm::dvec3 dw(step(0), step(1), step(2));
+      glm::dvec3 dt(step(3), step(4), step(5));
       R = rotationFromVector(dw) * R;
       t += dt;
       if (glm::length(dw) < 1e-9 && glm::length(dt) < 1e-9 * glm::length(t)) break;
