@@ -4,8 +4,9 @@
 #include <cmath>
 #include <vector>
 
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "ibl/camera_projection.hpp"
 
 namespace probelight::tracking {
 
@@ -51,27 +52,30 @@ class LinearImage {
   const std::array<double, 256>& lut_;
 };
 
-// Lens model both ways, in pixels. P = K keeps undistorted points in pixels.
+// Lens model both ways, in pixels: undistorted points stay in pixels (the
+// pinhole's K applied to the undistorted ray). ibl/camera_projection's
+// formulas, which tests check against OpenCV's projectPoints and
+// undistortPoints; called per point, without OpenCV's per-call set-up (a
+// few hundred calls a frame here).
 struct Lens {
-  cv::Matx33d K;
-  cv::Mat distortion;
-  explicit Lens(const CameraIntrinsics& camera)
-      : K(camera.fx_px, 0.0, camera.cx_px, 0.0, camera.fy_px, camera.cy_px, 0.0, 0.0, 1.0), distortion(1, 5, CV_64F) {
-    for (int i = 0; i < 5; ++i) distortion.at<double>(0, i) = camera.distortion[static_cast<std::size_t>(i)];
-  }
+  const CameraIntrinsics& camera;
   std::vector<cv::Point2d> undistort(const std::vector<cv::Point2d>& distorted_px) const {
     std::vector<cv::Point2d> out;
-    if (distorted_px.empty()) return out;
-    cv::undistortPoints(distorted_px, out, K, distortion, cv::noArray(), K,
-                        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 1e-10));
+    out.reserve(distorted_px.size());
+    for (const cv::Point2d& p : distorted_px) {
+      const glm::dvec3 ray = ibl::pixelToCameraRay(camera, {p.x, p.y});
+      out.emplace_back(camera.fx_px * ray.x + camera.cx_px, camera.fy_px * ray.y + camera.cy_px);
+    }
     return out;
   }
   std::vector<cv::Point2d> distort(const std::vector<cv::Point2d>& undistorted_px) const {
     std::vector<cv::Point2d> out;
-    if (undistorted_px.empty()) return out;
-    std::vector<cv::Point3d> rays;
-    for (const cv::Point2d& p : undistorted_px) rays.emplace_back((p.x - K(0, 2)) / K(0, 0), (p.y - K(1, 2)) / K(1, 1), 1.0);
-    cv::projectPoints(rays, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, distortion, out);
+    out.reserve(undistorted_px.size());
+    for (const cv::Point2d& p : undistorted_px) {
+      const glm::dvec2 pixel = ibl::projectToPixel(
+          camera, {(p.x - camera.cx_px) / camera.fx_px, (p.y - camera.cy_px) / camera.fy_px, 1.0});
+      out.emplace_back(pixel.x, pixel.y);
+    }
     return out;
   }
 };
@@ -153,7 +157,7 @@ std::optional<RefinedTagCorners> refineTagCorners(const std::uint8_t* luma, int 
                                                   const CornerRefineSettings& settings) {
   if (!luma || width < 4 || height < 4 || stride_bytes < width || border_width_cells < 3) return std::nullopt;
   try {
-    Lens lens(camera);
+    const Lens lens{camera};
     LinearImage image(luma, width, height, stride_bytes);
     std::vector<cv::Point2d> corners_cv;
     for (const glm::dvec2& c : corners_px) corners_cv.push_back(toCv(c));
