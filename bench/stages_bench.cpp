@@ -1099,7 +1099,9 @@ void registerAll() {
 
   for (DetectMode mode : {DetectMode::kAcquire, DetectMode::kTrack})
     for (int decimate : {1, 2, 3})
-      for (int threads : {1, 2})
+      for (int threads : {1, 2}) {
+        // More threads than libapriltag survives is no benchmark (maxDetectorThreads).
+        if (threads > tracking::maxDetectorThreads()) continue;
         benchmark::RegisterBenchmark((std::string("detect_pose/") + (mode == DetectMode::kTrack ? "track" : "acquire") +
                                       "/decimate:" + std::to_string(decimate) + "/threads:" + std::to_string(threads))
                                          .c_str(),
@@ -1107,6 +1109,7 @@ void registerAll() {
             ->Unit(kMillisecond)
             ->UseRealTime()
             ->MinTime(kMinTime);
+      }
 
   benchmark::RegisterBenchmark("upload/640x480", uploadFrame)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
   benchmark::RegisterBenchmark("upload/640x480/i420", uploadI420Frame)

@@ -1,6 +1,7 @@
 #include "app/app_settings.hpp"
 
 #include "config/config_reader.hpp"
+#include "tracking/tag_detector.hpp"
 
 namespace probelight {
 
@@ -57,6 +58,11 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.tracking.quad_decimate =
       tracking.readDouble("quad_decimate", settings.tracking.quad_decimate, Range::closed(1.0, 8.0));
   settings.tracking.threads = tracking.readInt("threads", settings.tracking.threads, Range::closed(1, 16));
+  if (settings.tracking.threads > probelight::tracking::maxDetectorThreads())
+    tracking.fail("threads", std::to_string(settings.tracking.threads) +
+                                 " needs libapriltag 3.4.3 or later; this build's " +
+                                 probelight::tracking::aprilTagVersion() +
+                                 " crashes at random with more than 1 (AprilRobotics/apriltag#339)");
   settings.tracking.quad_sigma = tracking.readDouble("quad_sigma", settings.tracking.quad_sigma, Range::closed(0.0, 5.0));
   settings.tracking.refine_edges = tracking.readBool("refine_edges", settings.tracking.refine_edges);
   settings.tracking.refine_corners = tracking.readBool("refine_corners", settings.tracking.refine_corners);

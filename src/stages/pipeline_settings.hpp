@@ -30,7 +30,7 @@ struct EnvironmentMapConfig {
 
 struct TrackingConfig {
   double quad_decimate = 2.0;
-  int threads = 2;
+  int threads = 1;  // libapriltag's worker threads, at most tracking::maxDetectorThreads()
   double quad_sigma = 0.0;
   bool refine_edges = true;
   bool refine_corners = true;  // full-resolution linear-light edge fit (tracking/corner_refiner.hpp)

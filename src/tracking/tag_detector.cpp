@@ -25,6 +25,16 @@ std::vector<std::string> availableTagFamilies() {
   return names;
 }
 
+int maxDetectorThreads() {
+#ifdef PROBELIGHT_APRILTAG_WORKER_POOL_RACE
+  return 1;
+#else
+  return 16;
+#endif
+}
+
+const char* aprilTagVersion() { return PROBELIGHT_APRILTAG_VERSION; }
+
 void detail::DetectorDeleter::operator()(apriltag_detector* detector) const {
   if (detector) apriltag_detector_destroy(detector);
 }
@@ -34,6 +44,9 @@ TagDetector::TagDetector(const TagDetectorSettings& settings) : settings_(settin
     throw std::invalid_argument("unknown AprilTag family '" + settings.family + "'");
   if (!(settings.quad_decimate >= 1.0f)) throw std::invalid_argument("quad_decimate must be >= 1");
   if (settings.nthreads < 1) throw std::invalid_argument("nthreads must be >= 1");
+  if (settings.nthreads > maxDetectorThreads())
+    throw std::invalid_argument("nthreads must be <= " + std::to_string(maxDetectorThreads()) +
+                                " with this libapriltag (its worker pool races; AprilRobotics/apriltag#339)");
   if (settings.full_frame_every_frames < 1) throw std::invalid_argument("full_frame_every_frames must be >= 1");
   if (!(settings.quad_sigma >= 0.0f)) throw std::invalid_argument("quad_sigma must be >= 0");
   if (!(settings.decode_sharpening >= 0.0)) throw std::invalid_argument("decode_sharpening must be >= 0");

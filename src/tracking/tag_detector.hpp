@@ -26,10 +26,21 @@ namespace probelight::tracking {
 // at 3, 25 px tags are lost, and without refine_edges the corners are off by
 // up to 1.8 px. The kiosk's tag is 60-200 px across, so 2 leaves margin for
 // steep views and a slower Pi; 3 is the next step if the CPU is short.
+// The most worker threads libapriltag may be given without crashing: 1 with
+// the libapriltag of Debian bookworm (3.3.0), whose worker pool hands out
+// tasks while the array holding them is still growing
+// (AprilRobotics/apriltag#339, fixed in 3.4.3). Measured here: creating a
+// detector and detecting with 2 threads crashed within 3,000 tries in 6 of
+// 6 runs, with 1 thread never. More threads made detection no faster on the
+// desktop anyway (docs/benchmarks.md).
+int maxDetectorThreads();
+// The libapriltag version this build was compiled against, for messages.
+const char* aprilTagVersion();
+
 struct TagDetectorSettings {
   std::string family = "tag36h11";
   float quad_decimate = 2.0f;      // quads are found on an image this many times smaller
-  int nthreads = 2;                // of the Pi's 4 cores; capture and rendering use the others
+  int nthreads = 1;                // at most maxDetectorThreads(); capture and rendering use the other cores
   float quad_sigma = 0.0f;         // Gaussian blur (px) before quad search; >0 for noisy sensors
   bool refine_edges = true;        // snap decimated edges to full-resolution gradients
   double decode_sharpening = 0.25; // libapriltag's default

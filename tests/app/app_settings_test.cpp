@@ -6,6 +6,7 @@
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
 #include "config/rig_file.hpp"
+#include "tracking/tag_detector.hpp"
 
 namespace probelight {
 namespace {
@@ -164,6 +165,10 @@ TEST(AppSettings, MapUpdateFieldsAreRangeChecked) {
   expectRejected("sim:\n  camera_buffers: 1\n", "sim.camera_buffers");
   expectRejected("sim:\n  min_exposure_reported: maybe\n", "sim.min_exposure_reported");
   expectRejected("lights:\n  post_reference: 2\n", "lights.post_reference");
+  // Worker threads libapriltag does not survive (its pool races before 3.4.3).
+  const int too_many_threads = tracking::maxDetectorThreads() + 1;
+  if (too_many_threads <= 16)
+    expectRejected("tracking:\n  threads: " + std::to_string(too_many_threads) + "\n", "tracking.threads");
 }
 
 }  // namespace
