@@ -468,7 +468,7 @@ void diffuseBlur(benchmark::State& state, bool eight_bit, int intermediate_rows,
   std::string error;
   FrameTextures frames;
   passes::EnvironmentMaps maps;
-  passes::EnvironmentMapSettings settings;  // reflection 64, prefilter 16, 4 iterations
+  passes::EnvironmentMapSettings settings;  // reflection 64, prefilter 16, 2 iterations
   settings.intermediate_rows = intermediate_rows;
   settings.diffuse_face_size = face_size;
   settings.blur_half_taps = half_taps;

@@ -13,15 +13,16 @@
 #include "cube_storage.glsl"
 
 #ifndef NORMAL_ITERATIONS
-#define NORMAL_ITERATIONS 4
+#define NORMAL_ITERATIONS 2
 #endif
 
+// Compared squared: a bisector shorter than the length is the blind spot.
 #ifdef PL_FRAGMENT_HIGHP
-#define BLIND_SPOT_LENGTH 1e-6
+#define BLIND_SPOT_LENGTH_SQUARED 1e-12
 #else
 // 1e-6 is below mediump's resolution next to 1; this only widens the blind
 // spot (already 0) by a few milliradians.
-#define BLIND_SPOT_LENGTH 1e-3
+#define BLIND_SPOT_LENGTH_SQUARED 1e-6
 #endif
 
 varying vec2 v_face_st;
@@ -31,6 +32,7 @@ uniform vec3 u_face_s_axis;  // d(direction) / d(2s - 1)
 uniform vec3 u_face_t_axis;  // d(direction) / d(2t - 1)
 
 uniform vec3 u_eye_ball;                 // (camera centre - ball centre) / radius, in W
+uniform vec3 u_eye_direction;            // normalize(u_eye_ball), computed once on the CPU
 uniform mat3 u_rotation_cam_from_world;  // R_cam_from_world
 uniform vec2 u_center_normalized;        // ball centre in the camera: (x/z, y/z)
 uniform float u_radius_over_depth;       // radius / ball centre's camera z
@@ -47,14 +49,17 @@ void main() {
   vec3 r = normalize(u_face_center + (2.0 * v_face_st.x - 1.0) * u_face_s_axis +
                      (2.0 * v_face_st.y - 1.0) * u_face_t_axis);
   // Fixed-point iteration on the ball normal, as ibl::reflectedDirectionToPixel;
-  // in ball units the surface point is the normal itself.
-  vec3 bisector = normalize(u_eye_ball) + r;
-  bool blind = length(bisector) < BLIND_SPOT_LENGTH;
-  vec3 normal = normalize(bisector);
+  // in ball units the surface point is the normal itself. Each normalize
+  // shares its squared length with the blind-spot test.
+  vec3 bisector = u_eye_direction + r;
+  float length_squared = dot(bisector, bisector);
+  bool blind = length_squared < BLIND_SPOT_LENGTH_SQUARED;
+  vec3 normal = bisector * inversesqrt(length_squared);
   for (int i = 0; i < NORMAL_ITERATIONS; ++i) {
     bisector = normalize(u_eye_ball - normal) + r;
-    blind = blind || length(bisector) < BLIND_SPOT_LENGTH;
-    normal = normalize(bisector);
+    length_squared = dot(bisector, bisector);
+    blind = blind || length_squared < BLIND_SPOT_LENGTH_SQUARED;
+    normal = bisector * inversesqrt(length_squared);
   }
   // Visible exactly when the normal faces the eye (convex ball).
   blind = blind || dot(normal, u_eye_ball - normal) <= 0.0;

@@ -280,6 +280,9 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
   probe_program_.use();
   glUniform3f(probe_program_.uniform("u_eye_ball"), static_cast<float>(eye_ball.x), static_cast<float>(eye_ball.y),
               static_cast<float>(eye_ball.z));
+  const glm::dvec3 eye_direction = glm::normalize(eye_ball);
+  glUniform3f(probe_program_.uniform("u_eye_direction"), static_cast<float>(eye_direction.x),
+              static_cast<float>(eye_direction.y), static_cast<float>(eye_direction.z));
   glUniformMatrix3fv(probe_program_.uniform("u_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
   glUniform2f(probe_program_.uniform("u_center_normalized"), static_cast<float>(center_normalized.x),
               static_cast<float>(center_normalized.y));
