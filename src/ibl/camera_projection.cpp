@@ -32,7 +32,12 @@ glm::dvec3 pixelToCameraRay(const CameraIntrinsics& camera, const glm::dvec2& pi
     const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
     const glm::dvec2 tangential{2.0 * p1 * p.x * p.y + p2 * (r2 + 2.0 * p.x * p.x),
                                 p1 * (r2 + 2.0 * p.y * p.y) + 2.0 * p2 * p.x * p.y};
-    p = (distorted - tangential) / radial;
+    const glm::dvec2 next = (distorted - tangential) / radial;
+    // Converged: the remaining error is about this step times the slope (< 1),
+    // ~1e-11 px; a mild lens gets here in a few steps, not all of them.
+    const bool converged = std::abs(next.x - p.x) + std::abs(next.y - p.y) < 1e-14;
+    p = next;
+    if (converged) break;
   }
   return {p.x, p.y, 1.0};
 }

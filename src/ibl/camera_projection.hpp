@@ -14,12 +14,13 @@ namespace probelight::ibl {
 // callers that can meet such points check std::isfinite (reflectedDirectionToPixel
 // and computeProbeOutline return empty / invalid). Zero would be a real pixel.
 glm::dvec2 projectToPixel(const CameraIntrinsics& camera, const glm::dvec3& point_cam);
-// Fixed-point steps pixelToCameraRay takes (OpenCV's undistortPoints scheme,
+// The most fixed-point steps pixelToCameraRay takes (OpenCV's undistortPoints scheme,
 // which defaults to 5). The error shrinks each step by roughly the slope of the
 // distortion, |d(distortion)/dx| ~ 3|k1| r^2 + 5|k2| r^4. Over a whole
 // 640x480, f = 525 frame with k1 = -0.28, k2 = 0.07 (stronger than a webcam)
 // 15 steps reach 1e-9 (tests/ibl measures it with cv::undistortPoints); 25
-// leaves margin for stronger lenses. A shader may take fewer where the lens is mild.
+// leaves margin for stronger lenses; it stops early once a step moves the
+// point by less than 1e-14 (normalised). A shader may take fewer where the lens is mild.
 constexpr int kUndistortIterations = 25;
 
 // Distorted pixel to the undistorted ray (x, y, 1) in the camera frame,

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ibl/camera_projection.hpp"
+#include "tracking/robust_line_fit.hpp"
 
 namespace probelight::tracking {
 
@@ -31,19 +32,22 @@ class LinearImage {
  public:
   LinearImage(const std::uint8_t* luma, int width, int height, int stride)
       : luma_(luma), width_(width), height_(height), stride_(stride), lut_(srgbToLinearTable()) {}
+  // Whether bilinear samples at p need no pixel outside the frame, with a
+  // margin for the rounding of points stepped between two inside ones.
+  bool inside(glm::dvec2 p) const {
+    constexpr double kMarginPx = 1e-6;
+    return p.x >= kMarginPx && p.y >= kMarginPx && p.x < width_ - 1 - kMarginPx && p.y < height_ - 1 - kMarginPx;
+  }
   // Bilinear in linear light (decode first, then interpolate: the average of
-  // the codes is not the code of the average). Empty outside the frame.
-  bool sample(glm::dvec2 p, double& value) const {
-    double fx = std::floor(p.x), fy = std::floor(p.y);
-    int x = static_cast<int>(fx), y = static_cast<int>(fy);
-    if (x < 0 || y < 0 || x + 1 >= width_ || y + 1 >= height_) return false;
-    double ax = p.x - fx, ay = p.y - fy;
+  // the codes is not the code of the average); p must be inside().
+  double sampleInside(glm::dvec2 p) const {
+    const int x = static_cast<int>(p.x), y = static_cast<int>(p.y);  // floor: p >= 0
+    const double ax = p.x - x, ay = p.y - y;
     const std::uint8_t* row0 = luma_ + static_cast<std::ptrdiff_t>(y) * stride_ + x;
     const std::uint8_t* row1 = row0 + stride_;
-    double top = (1.0 - ax) * lut_[row0[0]] + ax * lut_[row0[1]];
-    double bottom = (1.0 - ax) * lut_[row1[0]] + ax * lut_[row1[1]];
-    value = (1.0 - ay) * top + ay * bottom;
-    return true;
+    const double top = lut_[row0[0]] + ax * (lut_[row0[1]] - lut_[row0[0]]);
+    const double bottom = lut_[row1[0]] + ax * (lut_[row1[1]] - lut_[row1[0]]);
+    return top + ay * (bottom - top);
   }
 
  private:
@@ -84,12 +88,14 @@ glm::dvec2 toGlm(const cv::Point2d& p) { return {p.x, p.y}; }
 cv::Point2d toCv(const glm::dvec2& p) { return {p.x, p.y}; }
 
 // One profile across the edge, from inside (-R) to outside (+R) along the
-// outward normal, in linear light; the plateau levels are the means of its
-// outer quarters. Empty when the window leaves the frame.
+// outward normal, in linear light, kept as what the area rule needs: its
+// trapezoid-rule integral and its plateau levels (the means of its outer
+// quarters). Empty when the window leaves the frame.
 struct EdgeProfile {
   glm::dvec2 centre{0.0}, outward{0.0};
   double half_width_px = 0.0, step_px = 0.0;
-  std::vector<double> values;
+  int intervals = 0;          // samples - 1
+  double trapezoid_sum = 0.0;  // sum over intervals of the mean of their two ends
   double inside = 0.0, outside = 0.0;
 };
 
@@ -98,16 +104,22 @@ std::optional<EdgeProfile> sampleProfile(const LinearImage& image, glm::dvec2 ce
   // 4 samples a pixel: the trapezoid rule then follows the bilinear
   // interpolant's kinks closely (the area rule needs the integral, not the shape).
   constexpr double kStepPx = 0.25;
-  int n = static_cast<int>(std::ceil(half_width_px / kStepPx));
-  EdgeProfile profile{centre, outward, half_width_px, half_width_px / n, std::vector<double>(static_cast<std::size_t>(2 * n + 1))};
-  for (int i = -n; i <= n; ++i)
-    if (!image.sample(centre + (i * profile.step_px) * outward, profile.values[static_cast<std::size_t>(i + n)]))
-      return std::nullopt;
-  int ends = std::max(1, n / 4);
-  for (int i = 0; i < ends; ++i) {
-    profile.inside += profile.values[static_cast<std::size_t>(i)];
-    profile.outside += profile.values[profile.values.size() - 1 - static_cast<std::size_t>(i)];
+  const int n = static_cast<int>(std::ceil(half_width_px / kStepPx));
+  EdgeProfile profile{centre, outward, half_width_px, half_width_px / n, 2 * n};
+  const glm::dvec2 first = centre - half_width_px * outward, step = profile.step_px * outward;
+  // A straight window in a rectangle: inside at both ends is inside throughout.
+  if (!image.inside(first) || !image.inside(centre + half_width_px * outward)) return std::nullopt;
+  const int ends = std::max(1, n / 4);
+  const int last = 2 * n;
+  double sum = 0.0, end_values = 0.0;
+  for (int i = 0; i <= last; ++i) {
+    const double value = image.sampleInside(first + static_cast<double>(i) * step);
+    sum += value;
+    if (i < ends) profile.inside += value;
+    if (i > last - ends) profile.outside += value;
+    if (i == 0 || i == last) end_values += value;
   }
+  profile.trapezoid_sum = sum - 0.5 * end_values;
   profile.inside /= ends;
   profile.outside /= ends;
   return profile;
@@ -122,9 +134,8 @@ std::optional<double> edgeOffset(const EdgeProfile& profile, double inside, doub
   // edge); a weak step (shadow, glare, occluder) would give a position
   // dominated by noise, so it is dropped.
   if (!(std::abs(contrast) > 0.02) || !(std::abs(contrast) > 0.2 * std::max(outside, inside))) return std::nullopt;
-  double area = 0.0;
-  for (std::size_t i = 0; i + 1 < profile.values.size(); ++i)
-    area += 0.5 * profile.step_px * ((profile.values[i] - inside) + (profile.values[i + 1] - inside)) / contrast;
+  // The integral of (value - inside) / contrast over the window.
+  const double area = profile.step_px * (profile.trapezoid_sum - profile.intervals * inside) / contrast;
   // Area = distance from the edge to the outer end: edge at R - area from the centre.
   double offset = profile.half_width_px - area;
   if (!(std::abs(offset) < profile.half_width_px)) return std::nullopt;
@@ -135,18 +146,12 @@ std::optional<double> edgeOffset(const EdgeProfile& profile, double inside, doub
 // Huber-weighted so a few bad samples (a speck, the post's shadow) do not pull it.
 std::optional<cv::Vec3d> fitLine(const std::vector<cv::Point2d>& points) {
   if (points.size() < 4) return std::nullopt;
-  std::vector<cv::Point2f> as_float;  // fitLine wants float; coordinates < 1e4 keep ~1e-3 px, centred below
-  cv::Point2d mean(0, 0);
-  for (const cv::Point2d& p : points) mean += p;
-  mean *= 1.0 / static_cast<double>(points.size());
-  for (const cv::Point2d& p : points) as_float.emplace_back(static_cast<float>(p.x - mean.x), static_cast<float>(p.y - mean.y));
-  cv::Vec4f line;
-  cv::fitLine(as_float, line, cv::DIST_HUBER, 0.0, 1e-4, 1e-4);
-  double dx = line[0], dy = line[1];
-  double px = line[2] + mean.x, py = line[3] + mean.y;
-  cv::Vec3d l(-dy, dx, dy * px - dx * py);
-  if (!std::isfinite(l[0]) || !std::isfinite(l[2])) return std::nullopt;
-  return l;
+  std::vector<glm::dvec2> as_glm;
+  as_glm.reserve(points.size());
+  for (const cv::Point2d& p : points) as_glm.emplace_back(p.x, p.y);
+  const std::optional<glm::dvec3> line = fitLineRobust(as_glm);
+  if (!line) return std::nullopt;
+  return cv::Vec3d((*line)[0], (*line)[1], (*line)[2]);
 }
 
 }  // namespace

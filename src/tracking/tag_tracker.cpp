@@ -92,11 +92,15 @@ void refineOnEdgePoints(std::vector<TagPoseSolution>& solutions, const std::arra
                                   std::vector<std::array<double, 6>>& jacobian) {
     r.resize(points.size());
     jacobian.resize(points.size());
+    struct Projected {
+      glm::dvec2 pixel;
+      std::array<glm::dvec2, 6> d;  // d pixel / d parameter
+    };
+    // The points come a segment at a time (the corner refiner lists them so),
+    // so a segment's two projected ends are kept for the points after it.
+    std::optional<std::pair<glm::dvec2, glm::dvec2>> last_segment;
+    Projected a, b;
     for (std::size_t i = 0; i < points.size(); ++i) {
-      struct Projected {
-        glm::dvec2 pixel;
-        std::array<glm::dvec2, 6> d;  // d pixel / d parameter
-      };
       auto project = [&](glm::dvec2 q) {
         const glm::dvec3 rotated = R * glm::dvec3(q.x * half, q.y * half, 0.0);
         const glm::dvec3 c = rotated + t;
@@ -114,7 +118,12 @@ void refineOnEdgePoints(std::vector<TagPoseSolution>& solutions, const std::arra
         }
         return out;
       };
-      const Projected a = project(points[i].segment_a), b = project(points[i].segment_b);
+      const std::pair<glm::dvec2, glm::dvec2> segment(points[i].segment_a, points[i].segment_b);
+      if (!last_segment || *last_segment != segment) {
+        a = project(segment.first);
+        b = project(segment.second);
+        last_segment = segment;
+      }
       const glm::dvec2 e = b.pixel - a.pixel, s = points[i].undistorted_px - a.pixel;
       const double length = glm::length(e);
       const double residual = (s.x * e.y - s.y * e.x) / length;
