@@ -93,7 +93,7 @@ class Analyzer {
     settings_.lights.post_reference = settings_.lights.post_reference && options_.post_reference;
     std::error_code ec;
     if (!fs::exists(options_.frame_path, ec)) return Status::badInput(options_.frame_path + ": no such file (--frame)");
-    frame_bgr_ = cv::imread(options_.frame_path, cv::IMREAD_COLOR);
+    frame_bgr_ = readImageFile(options_.frame_path, cv::IMREAD_COLOR);
     if (frame_bgr_.empty()) return Status::badInput(options_.frame_path + ": not a readable image (--frame)");
     if (frame_bgr_.cols != camera_.width_px || frame_bgr_.rows != camera_.height_px)
       // The calibration belongs to another resolution: every pixel position
@@ -266,7 +266,7 @@ class Analyzer {
     Json unread = Json::array();
     std::vector<BracketCandidate> candidates;
     for (const BracketOption& bracket : options_.brackets) {
-      const cv::Mat bgr = cv::imread(bracket.path, cv::IMREAD_COLOR);
+      const cv::Mat bgr = readImageFile(bracket.path, cv::IMREAD_COLOR);
       std::string why;
       std::error_code ec;
       if (bgr.empty())

@@ -14,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "capture/rgb_image_io.hpp"
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
 #include "core/types.hpp"
@@ -127,7 +128,7 @@ int runCalibrateCamera(const CalibrateCameraOptions& options, std::ostream& out,
   };
   for (const std::string& path : files) {
     // Grey is what the detector and cornerSubPix work on; colour adds nothing.
-    const cv::Mat grey = cv::imread(path, cv::IMREAD_GRAYSCALE);
+    const cv::Mat grey = readImageFile(path, cv::IMREAD_GRAYSCALE);
     if (grey.empty()) {
       reject(path, "unreadable (not an image OpenCV can decode)");
       continue;

@@ -86,7 +86,7 @@ ThreadedFrameSource::Produced ImageFrameSource::produce(std::uint64_t index, Fra
       next_file_ = 0;
     }
     const std::string& path = files_[next_file_++];
-    cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
+    cv::Mat bgr = readImageFile(path, cv::IMREAD_COLOR);
     if (bgr.empty()) {
       std::cerr << "probelight: warning: skipping '" << path << "': not a readable image\n";
       continue;

@@ -1,5 +1,7 @@
 #include "capture/rgb_image_io.hpp"
 
+#include <new>
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -29,6 +31,16 @@ bool writeRgbImage(const std::string& path, const ImageRGB8& rgb, const std::vec
     return cv::imwrite(path, bgrFromRgb(rgb), params);
   } catch (const cv::Exception&) {
     return false;  // an extension OpenCV cannot write
+  }
+}
+
+cv::Mat readImageFile(const std::string& path, int imread_flags) {
+  try {
+    return cv::imread(path, imread_flags);
+  } catch (const cv::Exception&) {
+    return cv::Mat();
+  } catch (const std::bad_alloc&) {
+    return cv::Mat();  // a header within OpenCV's limit that still does not fit in memory
   }
 }
 

@@ -19,5 +19,9 @@ cv::Mat bgrFromRgb(const ImageRGB8& rgb);
 // `rgb` written to `path` (the format from its extension; `params` as
 // cv::imwrite's). False when it cannot be written.
 bool writeRgbImage(const std::string& path, const ImageRGB8& rgb, const std::vector<int>& params = {});
+// cv::imread that cannot throw: OpenCV throws (instead of returning an empty
+// image) when a file's header claims more pixels than it allows, e.g. a
+// 69-byte PNG that says 65535x65535. Empty then, as for any unreadable file.
+cv::Mat readImageFile(const std::string& path, int imread_flags);
 
 }  // namespace probelight

@@ -1,6 +1,8 @@
 #include "config/camera_file.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace probelight::config {
 
@@ -17,13 +19,34 @@ void validateCameraIntrinsics(const CameraIntrinsics& camera, const std::string&
   auto fail = [&](const char* field, const std::string& problem) {
     throw ConfigError(path + ": field '" + field + "': " + problem);
   };
-  if (camera.width_px <= 0) fail("image_width", std::to_string(camera.width_px) + " is out of range, must be > 0");
-  if (camera.height_px <= 0) fail("image_height", std::to_string(camera.height_px) + " is out of range, must be > 0");
+  // Sizes: a frame the GPU can hold as one texture on the boards (8192 on
+  // the Pi 5's V3D, 4096 on the Pi 4's for now); more is a typo, and would
+  // allocate gigabytes in the simulator before anything else failed.
+  if (camera.width_px <= 0 || camera.width_px > kMaxImageSidePx)
+    fail("image_width", std::to_string(camera.width_px) + " is out of range, must be in [1, " +
+                            std::to_string(kMaxImageSidePx) + "]");
+  if (camera.height_px <= 0 || camera.height_px > kMaxImageSidePx)
+    fail("image_height", std::to_string(camera.height_px) + " is out of range, must be in [1, " +
+                             std::to_string(kMaxImageSidePx) + "]");
   for (double value : {camera.fx_px, camera.fy_px, camera.cx_px, camera.cy_px}) checkFinite(path, "camera_matrix", value);
   for (double value : camera.distortion) checkFinite(path, "distortion_coefficients", value);
-  if (camera.fx_px <= 0 || camera.fy_px <= 0)
-    fail("camera_matrix", "focal lengths fx=" + formatNumber(camera.fx_px) + ", fy=" + formatNumber(camera.fy_px) +
-                              " must be > 0");
+  // Focal lengths a pinhole model can mean: 0.1x the larger side is a 157 deg
+  // field of view (past what the pinhole model fits), 50x is 1.1 deg.
+  const double side_px = std::max(camera.width_px, camera.height_px);
+  for (double focal : {camera.fx_px, camera.fy_px})
+    if (!(focal >= kMinFocalPerSide * side_px && focal <= kMaxFocalPerSide * side_px))
+      fail("camera_matrix", "focal lengths fx=" + formatNumber(camera.fx_px) + ", fy=" + formatNumber(camera.fy_px) +
+                                " are out of range, must be in [" + formatNumber(kMinFocalPerSide * side_px) + ", " +
+                                formatNumber(kMaxFocalPerSide * side_px) + "] px for a " +
+                                std::to_string(camera.width_px) + "x" + std::to_string(camera.height_px) + " image");
+  // Wider than any calibration of a real lens gives (|k1|, |k2| stay below
+  // a few, k3 below a few tens, p1 and p2 below 0.01), and small enough that
+  // r^6 k3 cannot overflow anywhere in the image.
+  const char* const names[5] = {"k1", "k2", "p1", "p2", "k3"};
+  for (std::size_t i = 0; i < 5; ++i)
+    if (!(std::abs(camera.distortion[i]) <= kMaxDistortion[i]))
+      fail("distortion_coefficients", std::string(names[i]) + " = " + formatNumber(camera.distortion[i]) +
+                                          " is out of range, must be within +-" + formatNumber(kMaxDistortion[i]));
   // The principal point is near the image centre for any real lens; outside
   // the image means a wrong resolution or a matrix from another camera.
   if (camera.cx_px < 0 || camera.cx_px > camera.width_px || camera.cy_px < 0 || camera.cy_px > camera.height_px)

@@ -18,13 +18,19 @@ struct TagFamilyInfo {
 // The families libapriltag 3.3 ships.
 const std::vector<TagFamilyInfo>& knownTagFamilies();
 
+// Plausibility bounds (validateRigGeometry says why).
+constexpr double kMinLengthM = 0.001;
+constexpr double kMaxLengthM = 10.0;
+constexpr double kMinReflectance = 0.01;
+
 // Fields: tag_family (one of knownTagFamilies), tag_id (0..code_count-1),
-// tag_size (metres, outer edge of the black border, > 0), probe_center
-// ([x, y, z] in W, metres), probe_radius (m, > 0), probe_reflectance
-// (in (0, 1], default 1), tag_white_albedo (the printed white's diffuse
-// reflectance, in (0, 1], default 0.85), post_radius (m, in [0,
-// probe_radius), default 0: no post) and post_albedo (the post's diffuse
-// reflectance, in [0, 1], default 0: not a reference). Throws ConfigError.
+// tag_size (metres, outer edge of the black border, in [1 mm, 10 m]),
+// probe_center ([x, y, z] in W, metres, each within +-10 m), probe_radius
+// (m, in [1 mm, 10 m]), probe_reflectance (in [0.01, 1], default 1),
+// tag_white_albedo (the printed white's diffuse reflectance, in [0.01, 1],
+// default 0.85), post_radius (m, in [0, probe_radius), default 0: no post)
+// and post_albedo (the post's diffuse reflectance, 0 or in [0.01, 1],
+// default 0: not a reference). Throws ConfigError.
 RigGeometry loadRigFile(const std::string& path);
 
 // Throws ConfigError when `rig` would not load back or cannot be written.

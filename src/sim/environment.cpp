@@ -147,7 +147,13 @@ std::unique_ptr<LatLongEnvironment> LatLongEnvironment::load(const std::string& 
   // OpenCV refuses EXR unless asked (CVE hardening); 0 keeps a user's choice.
   setenv("OPENCV_IO_ENABLE_OPENEXR", "1", 0);
   if (!std::filesystem::exists(path)) throw SceneError("environment file '" + path + "' does not exist");
-  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  cv::Mat image;
+  try {
+    image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception&) {
+    // OpenCV throws when a header claims more pixels than it allows.
+    image = cv::Mat();
+  }
   if (image.empty())
     throw SceneError("environment file '" + path + "' could not be decoded as an .hdr/.exr image");
   if (image.channels() < 3)

@@ -495,6 +495,53 @@ TEST_F(Analyze, MissingFrameIsExit2NamingIt) {
   EXPECT_FALSE(fs::exists(dir_ / "out" / "analysis.json")) << "nothing ran";
 }
 
+// A PNG of 69 bytes whose header (a valid IHDR, CRC and all) claims
+// width x height pixels, with no image data: OpenCV reads the header and
+// throws from its size check (issue 15, D5) rather than return empty.
+std::string pngHeaderClaiming(std::uint32_t width, std::uint32_t height) {
+  auto crc32 = [](const std::string& bytes) {
+    std::uint32_t crc = 0xffffffffu;
+    for (unsigned char byte : bytes) {
+      crc ^= byte;
+      for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    return crc ^ 0xffffffffu;
+  };
+  auto bigEndian = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
+                       static_cast<char>(v)};
+  };
+  auto chunk = [&](const std::string& type, const std::string& data) {
+    return bigEndian(static_cast<std::uint32_t>(data.size())) + type + data + bigEndian(crc32(type + data));
+  };
+  const std::string ihdr = bigEndian(width) + bigEndian(height) + std::string{8, 2, 0, 0, 0};  // 8-bit RGB
+  const std::string idat = std::string{0x78, 0x01, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01};  // an empty zlib stream
+  return std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) + chunk("IDAT", idat) + chunk("IEND", "");
+}
+
+TEST_F(Analyze, AFrameWhoseHeaderClaimsFourBillionPixelsIsExit2NamingIt) {
+  config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
+  config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
+  const fs::path huge = dir_ / "huge.png";
+  std::ofstream(huge, std::ios::binary) << pngHeaderClaiming(65535, 65535);
+  // The file is what the issue describes: OpenCV's decoder throws on it.
+  EXPECT_THROW(cv::imread(huge.string(), cv::IMREAD_COLOR), cv::Exception);
+  const CommandResult result = run("analyze --frame " + huge.string() + " --camera " + (dir_ / "camera.yaml").string() +
+                                   " --rig " + (dir_ / "rig.yaml").string() + " --out " + (dir_ / "out").string());
+  EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
+  expectOneLine(result);
+  EXPECT_NE(result.stderr_text.find(huge.string() + ": not a readable image"), std::string::npos) << result.stderr_text;
+
+  // The same file among the frames `run --source images` replays: skipped
+  // with a warning naming it, and no crash (a crash shows as 128 + the signal).
+  const CommandResult replay = run("run --source images --images " + huge.string() + " --camera " +
+                                   (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
+                                   " --display headless --frames 1 --out " + (dir_ / "replay").string());
+  EXPECT_EQ(replay.exit_status, 0) << replay.stderr_text;
+  EXPECT_NE(replay.stderr_text.find("skipping '" + huge.string() + "': not a readable image"), std::string::npos)
+      << replay.stderr_text;
+}
+
 TEST_F(Analyze, FrameOfAnotherSizeIsExit2NamingBothSizes) {
   cv::imwrite((dir_ / "small.png").string(), cv::Mat(240, 320, CV_8UC3, cv::Scalar(90, 90, 90)));
   config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});  // 640x480

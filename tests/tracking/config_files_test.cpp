@@ -167,7 +167,7 @@ TEST(CameraFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
   expectConfigError(load(text_width), text_width, "image_width", "expected an integer");
 
   std::string negative_fx = folder.write("negative_fx.yaml", cameraFileWith("-600., 0., 320., 0., 600., 240., 0., 0., 1.", kDistortion1x5));
-  expectConfigError(load(negative_fx), negative_fx, "camera_matrix", "> 0");
+  expectConfigError(load(negative_fx), negative_fx, "camera_matrix", "out of range");
 
   std::string outside = folder.write("outside.yaml", cameraFileWith("600., 0., 700., 0., 600., 240., 0., 0., 1.", kDistortion1x5));
   expectConfigError(load(outside), outside, "camera_matrix", "principal point");
@@ -186,6 +186,24 @@ TEST(CameraFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
 
   std::string fisheye = folder.write("fisheye.yaml", cameraFileWith(kPlainMatrix, kDistortion1x5, "fisheye_model: 1\n"));
   expectConfigError(load(fisheye), fisheye, "fisheye_model", "not supported");
+
+  // Implausible values that once passed and crashed later (issue 15, D4, D7,
+  // D8, D19): a 20000x15000 frame the simulator would allocate 21 GB for, a
+  // focal length of 1e-300 px, a tangential term of 1000, k1 of 1e308.
+  std::string huge = folder.write("huge.yaml", [] {
+    std::string text = cameraFileWith("600., 0., 320., 0., 600., 240., 0., 0., 1.", kDistortion1x5);
+    text.replace(text.find("image_width: 640"), 16, "image_width: 20000");
+    return text;
+  }());
+  expectConfigError(load(huge), huge, "image_width", "[1, 8192]");
+  std::string tiny_focal = folder.write("tiny_focal.yaml", cameraFileWith("1e-300, 0., 320., 0., 600., 240., 0., 0., 1.", kDistortion1x5));
+  expectConfigError(load(tiny_focal), tiny_focal, "camera_matrix", "[64, 32000] px for a 640x480 image");
+  std::string long_focal = folder.write("long_focal.yaml", cameraFileWith("600., 0., 320., 0., 1e308, 240., 0., 0., 1.", kDistortion1x5));
+  expectConfigError(load(long_focal), long_focal, "camera_matrix", "out of range");
+  std::string tangential = folder.write("tangential.yaml", cameraFileWith(kPlainMatrix, "distortion_coefficients: [0.1, 0, 1000, 0, 0]\n"));
+  expectConfigError(load(tangential), tangential, "distortion_coefficients", "p1 = 1000 is out of range");
+  std::string radial = folder.write("radial.yaml", cameraFileWith(kPlainMatrix, "distortion_coefficients: [1e308, 0, 0, 0, 0]\n"));
+  expectConfigError(load(radial), radial, "distortion_coefficients", "k1");
 }
 
 TEST(RigFile, LoadsWithDefaultReflectance) {
@@ -239,7 +257,21 @@ TEST(RigFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
   std::string negative_id = rigWith("negative_id.yaml", "tag_id: 7", "tag_id: -1");
   expectConfigError(load(negative_id), negative_id, "tag_id", "out of range");
   std::string size = rigWith("size.yaml", "tag_size: 0.08", "tag_size: 0");
-  expectConfigError(load(size), size, "tag_size", "> 0");
+  expectConfigError(load(size), size, "tag_size", "in [0.001, 10]");
+  // Implausible values that once passed and crashed or wrote inf later
+  // (issue 15, D6, D7, D8, D20).
+  std::string size_tiny = rigWith("size_tiny.yaml", "tag_size: 0.08", "tag_size: 1e-300");
+  expectConfigError(load(size_tiny), size_tiny, "tag_size", "in [0.001, 10]");
+  std::string size_huge = rigWith("size_huge.yaml", "tag_size: 0.08", "tag_size: 1e308");
+  expectConfigError(load(size_huge), size_huge, "tag_size", "in [0.001, 10]");
+  std::string centre_far = rigWith("centre_far.yaml", "[0.1, -0.02, 0.03]", "[1e308, -0.02, 0.03]");
+  expectConfigError(load(centre_far), centre_far, "probe_center", "out of range");
+  std::string centre_1e6 = rigWith("centre_1e6.yaml", "[0.1, -0.02, 0.03]", "[1e6, -0.02, 0.03]");
+  expectConfigError(load(centre_1e6), centre_1e6, "probe_center", "out of range");
+  std::string dim_ball = folder.write("dim_ball.yaml", std::string(kGoodRig) + "probe_reflectance: 1e-300\n");
+  expectConfigError(load(dim_ball), dim_ball, "probe_reflectance", "[0.01, 1]");
+  std::string dim_white = folder.write("dim_white.yaml", std::string(kGoodRig) + "tag_white_albedo: 1e-320\n");
+  expectConfigError(load(dim_white), dim_white, "tag_white_albedo", "[0.01, 1]");
   std::string size_text = rigWith("size_text.yaml", "tag_size: 0.08", "tag_size: ten");
   expectConfigError(load(size_text), size_text, "tag_size", "expected a number");
   std::string size_inf = rigWith("size_inf.yaml", "tag_size: 0.08", "tag_size: .inf");
@@ -254,7 +286,7 @@ TEST(RigFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
   std::string radius_missing = rigWith("radius_missing.yaml", "probe_radius: 0.03\n", "");
   expectConfigError(load(radius_missing), radius_missing, "probe_radius", "missing");
   std::string reflectance = folder.write("reflectance.yaml", std::string(kGoodRig) + "probe_reflectance: 0\n");
-  expectConfigError(load(reflectance), reflectance, "probe_reflectance", "(0, 1]");
+  expectConfigError(load(reflectance), reflectance, "probe_reflectance", "[0.01, 1]");
   std::string typo = folder.write("typo.yaml", std::string(kGoodRig) + "probe_reflectence: 0.7\n");
   expectConfigError(load(typo), typo, "probe_reflectence", "unknown field");
   // A post no thinner than the ball, or under a ball that rests on the
@@ -270,7 +302,9 @@ TEST(RigFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
   std::string grounded = folder.write("grounded.yaml", std::string(kGoodRig) + "post_radius: 0.003\n");
   expectConfigError(load(grounded), grounded, "post_radius", "on the ground");
   std::string bright = folder.write("bright.yaml", std::string(kGoodRig) + "post_albedo: 1.5\n");
-  expectConfigError(load(bright), bright, "post_albedo", "[0, 1]");
+  expectConfigError(load(bright), bright, "post_albedo", "out of range");
+  std::string dim_post = folder.write("dim_post.yaml", std::string(kGoodRig) + "post_albedo: 1e-320\n");
+  expectConfigError(load(dim_post), dim_post, "post_albedo", "0 (unknown) or in [0.01, 1]");
   EXPECT_EQ(config::loadRigFile(raised).post_radius_m, 0.0) << "no post unless one is described";
   std::string twice = folder.write("twice.yaml", std::string(kGoodRig) + "tag_id: 8\n");
   expectConfigError(load(twice), twice, "tag_id", "more than once");
