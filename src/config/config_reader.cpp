@@ -109,13 +109,105 @@ struct ConfigReader::Document {
 ConfigReader::ConfigReader(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path + ": cannot open file (missing or unreadable)");
-  std::stringstream text;
-  text << in.rdbuf();
-  *this = fromText(text.str(), path);
+  // Read at most one byte past the limit: a settings file is a few kB (an
+  // OpenCV calibration with every view's points a few hundred), so more is
+  // not one of ours, and need not be held in memory to say so.
+  std::string text(kMaxConfigFileBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxConfigFileBytes)
+    throw ConfigError(path + ": larger than " + std::to_string(kMaxConfigFileBytes >> 20) +
+                      " MiB, not a probelight settings or calibration file");
+  *this = fromText(text, path);
 }
+
+namespace {
+
+// OpenCV's YAML parser recurses once per nesting level with no limit, so a
+// file nested 50,000 deep overflows the stack (issue 15, D1). Every file
+// probelight reads is a few levels deep; the deepest flow nesting ([ and {)
+// and the deepest indentation are checked before OpenCV sees the text.
+// Empty when within the limits, else the problem with its line number.
+// OpenCV reads an integer literal past 32 bits wrapped (4294967297 as 1) and
+// one with a leading zero as octal (010 as 8), both silently (issue 15, D2,
+// D3): such a token, as a whole (a run of letters, digits, '.', '+', '-'),
+// is refused here with what OpenCV would have made of it.
+std::optional<std::string> integerLiteralProblem(const std::string& token, int line) {
+  std::size_t digits_from = (token[0] == '+' || token[0] == '-') ? 1 : 0;
+  if (digits_from >= token.size()) return std::nullopt;
+  const std::string digits = token.substr(digits_from);
+  const std::string where = "line " + std::to_string(line) + ": ";
+  if (digits.size() > 1 && digits[0] == '0' && (digits[1] == 'x' || digits[1] == 'X'))
+    return where + token + " is hexadecimal, which is not read as written; write it in decimal";
+  if (!std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) return std::nullopt;
+  if (digits.size() > 1 && digits[0] == '0')
+    return where + token + " has a leading zero, which OpenCV reads as octal; write it without";
+  if (digits.size() > 10 || std::stoll(digits) > 2147483647LL)
+    return where + token + " does not fit in a 32-bit integer (OpenCV would wrap it)";
+  return std::nullopt;
+}
+
+std::optional<std::string> nestingProblem(const std::string& text) {
+  int depth = 0, line = 1, column = 0;
+  bool in_comment = false, in_indent = true;
+  char quote = 0;
+  char previous = '\n';
+  std::string token;
+  auto isTokenChar = [](char c) {
+    return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '.' || c == '+' ||
+           c == '-' || c == '_';
+  };
+  for (std::size_t i = 0; i <= text.size(); ++i) {
+    const char c = i < text.size() ? text[i] : '\n';
+    // A token ends at any other character: check it as an integer literal.
+    if (!in_comment && !quote && isTokenChar(c)) {
+      token += c;
+    } else if (!token.empty()) {
+      // A key ("x1:") is no number; only values are read as integers.
+      if (c != ':')
+        if (std::optional<std::string> problem = integerLiteralProblem(token, line)) return problem;
+      token.clear();
+    }
+    if (c == '\n') {
+      ++line;
+      column = 0;
+      in_comment = false;
+      in_indent = true;
+      previous = c;
+      continue;
+    }
+    if (in_indent && c == ' ') {
+      if (++column > kMaxConfigIndentColumns)
+        return "line " + std::to_string(line) + " is indented past column " + std::to_string(kMaxConfigIndentColumns);
+      previous = c;
+      continue;
+    }
+    in_indent = false;
+    if (in_comment) continue;
+    if (quote) {
+      if (c == quote) quote = 0;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+    } else if (c == '#' && (previous == ' ' || previous == '\t' || previous == '\n')) {
+      in_comment = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxConfigNestingDepth)
+        return "nested deeper than " + std::to_string(kMaxConfigNestingDepth) + " levels at line " +
+               std::to_string(line);
+    } else if (c == ']' || c == '}') {
+      depth = std::max(0, depth - 1);
+    }
+    previous = c;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
 
 ConfigReader ConfigReader::fromText(const std::string& yaml_text, const std::string& display_name) {
   if (yaml_text.find_first_not_of(" \t\r\n") == std::string::npos) throw ConfigError(display_name + ": file is empty");
+  if (const std::optional<std::string> problem = nestingProblem(yaml_text))
+    throw ConfigError(display_name + ": " + *problem + "; probelight's files are a few levels deep");
   // OpenCV refuses YAML without its "%YAML:1.0" first line; people writing
   // rig.yaml by hand should not have to know that.
   int header_lines_added = 0;

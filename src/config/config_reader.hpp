@@ -12,6 +12,7 @@
 //   file.rejectUnknownFields();                   // typos such as `tag_sise` fail here
 #pragma once
 
+#include <cstddef>
 #include <initializer_list>
 #include <limits>
 #include <memory>
@@ -26,6 +27,12 @@
 #include <opencv2/core.hpp>
 
 namespace probelight::config {
+
+// What a file may be before OpenCV's parser is given it (ConfigReader).
+constexpr std::size_t kMaxConfigFileBytes = std::size_t{16} << 20;
+constexpr int kMaxConfigNestingDepth = 64;      // [ and { inside one another
+constexpr int kMaxConfigIndentColumns = 1024;  // leading spaces of a line
+
 
 // what() is always ONE line: "<file>: field '<name>': <problem>" or
 // "<file>: <problem>" when the file itself cannot be read or parsed.

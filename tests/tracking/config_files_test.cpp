@@ -377,3 +377,67 @@ TEST(ConfigReader, ReportsSectionErrorsWithDottedNames) {
 
 }  // namespace
 }  // namespace probelight
+
+namespace probelight {
+namespace {
+
+// OpenCV's YAML parser recursed without a limit: 50,000 nested brackets
+// crashed every loader with SIGSEGV (issue 15, D1). Now one line naming the
+// file and the line, for flow nesting and for block indentation, before
+// OpenCV sees the text; brackets in comments and quoted text do not count.
+TEST(ConfigReader, TooDeepNestingOrATooLargeFileIsOneLineNotACrash) {
+  TempFolder folder;
+  const std::string deep = folder.write("deep.yaml", "x: " + std::string(50000, '[') + std::string(50000, ']') + "\n");
+  expectConfigError([&] { config::loadRigFile(deep); }, deep, "", "nested deeper than 64 levels at line 1");
+  expectConfigError([&] { config::loadCameraFile(deep); }, deep, "", "nested deeper than 64 levels");
+  std::string block = "a:\n";
+  for (int i = 1; i < 1100; ++i) block += std::string(static_cast<std::size_t>(i), ' ') + "b" + std::to_string(i) + ":\n";
+  const std::string indented = folder.write("indented.yaml", block);
+  expectConfigError([&] { config::loadRigFile(indented); }, indented, "", "indented past column 1024");
+  // A file of a few MB of spaces is no settings file (and is not parsed).
+  const std::string large = folder.write("large.yaml", "a: 1\n" + std::string(config::kMaxConfigFileBytes, '\n'));
+  expectConfigError([&] { config::loadRigFile(large); }, large, "", "larger than 16 MiB");
+  // At the limit, and with brackets in a comment and a quoted string, it parses.
+  const std::string nested_ok = std::string(64, '[') + "1" + std::string(64, ']');
+  ConfigReader ok = ConfigReader::fromText("a: " + nested_ok + "\n# " + std::string(100, '[') +
+                                               "\nb: \"" + std::string(100, '{') + "\"\n",
+                                           "ok.yaml");
+  EXPECT_EQ(ok.readString("b", ""), std::string(100, '{'));
+  expectConfigError([] { ConfigReader::fromText("a: " + std::string(65, '[') + std::string(65, ']') + "\n", "deep65.yaml"); },
+                    "deep65.yaml", "", "nested deeper than 64");
+}
+
+// OpenCV read these silently as other numbers (issue 15, D2, D3): now each
+// is one line naming the file, the line and the literal.
+TEST(ConfigReader, IntegersThatOpenCvWouldWrapOrReadAsOctalAreRefused) {
+  TempFolder folder;
+  const std::string good = "tag_family: tag36h11\ntag_id: 7\ntag_size: 0.08\nprobe_center: [0.1, -0.02, 0.03]\nprobe_radius: 0.03\n";
+  auto rigWithId = [&](const std::string& name, const std::string& id) {
+    std::string text = good;
+    text.replace(text.find("tag_id: 7"), 9, "tag_id: " + id);
+    return folder.write(name, text);
+  };
+  const std::string wraps = rigWithId("wraps.yaml", "4294967297");  // was read as 1
+  expectConfigError([&] { config::loadRigFile(wraps); }, wraps, "", "line 2: 4294967297 does not fit in a 32-bit integer");
+  const std::string huge = rigWithId("huge.yaml", "99999999999999999999");  // was read as -1
+  expectConfigError([&] { config::loadRigFile(huge); }, huge, "", "does not fit in a 32-bit integer");
+  const std::string octal = rigWithId("octal.yaml", "010");  // was read as 8
+  expectConfigError([&] { config::loadRigFile(octal); }, octal, "", "010 has a leading zero");
+  const std::string hex = rigWithId("hex.yaml", "0x10");
+  expectConfigError([&] { config::loadRigFile(hex); }, hex, "", "0x10 is hexadecimal");
+  std::string size_text = good;
+  size_text.replace(size_text.find("tag_size: 0.08"), 14, "tag_size: 010");  // was 8 m
+  const std::string octal_size = folder.write("octal_size.yaml", size_text);
+  expectConfigError([&] { config::loadRigFile(octal_size); }, octal_size, "", "leading zero");
+  // What stays readable: the largest int, a negative one, decimals with
+  // leading zeros, keys with digits, times inside quotes.
+  ConfigReader ok = ConfigReader::fromText(
+      "a: 2147483647\nb: -5\nc: 0.08\nd0: 0\ne: \"14:05:09\"\nf: [0., 0.5, 1e-3]\n", "ok.yaml");
+  EXPECT_EQ(ok.readInt("a"), 2147483647);
+  EXPECT_EQ(ok.readInt("b", 0, config::Range::closed(-10, 10)), -5);
+  EXPECT_DOUBLE_EQ(ok.readDouble("c"), 0.08);
+  EXPECT_EQ(ok.readInt("d0"), 0);
+}
+
+}  // namespace
+}  // namespace probelight
