@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <charconv>
+#include <limits>
 #include <cmath>
 #include <deque>
 #include <functional>
@@ -16,7 +17,8 @@ namespace {
 // The values: every flag's value is a string to CLI11; these turn it into
 // the option's type, with a message that names the flag.
 
-long long parseInteger(const std::string& flag, const std::string& text, long long min_value) {
+long long parseInteger(const std::string& flag, const std::string& text, long long min_value,
+                       long long max_value = std::numeric_limits<long long>::max()) {
   long long value = 0;
   const char* begin = text.data();
   const char* end = text.data() + text.size();
@@ -25,6 +27,8 @@ long long parseInteger(const std::string& flag, const std::string& text, long lo
     throw UsageError("flag " + flag + ": expected a whole number, got '" + text + "'");
   if (value < min_value)
     throw UsageError("flag " + flag + ": must be at least " + std::to_string(min_value) + ", got " + text);
+  if (value > max_value)
+    throw UsageError("flag " + flag + ": must be at most " + std::to_string(max_value) + ", got " + text);
   return value;
 }
 
@@ -252,7 +256,7 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
        {"-n,--frames", "N", "frames to process, 0 = until the source ends (default 300)",
         [&](auto& f, auto& v) { options.frames = parseInteger(f, v, 0); }},
        {"--save-every", "K", "write every K-th composited frame as PNG, 0 = none (default 1)",
-        [&](auto& f, auto& v) { options.save_every = static_cast<int>(parseInteger(f, v, 0)); }},
+        [&](auto& f, auto& v) { options.save_every = static_cast<int>(parseInteger(f, v, 0, std::numeric_limits<int>::max())); }},
        {"-o,--out", "DIR", "output folder for frames and report.json (default out)", into(options.out_dir)},
        {"--capture", "DIR",
         "keep the last camera frame with its camera.yaml and rig.yaml in DIR (for analyze, render)",

@@ -35,6 +35,11 @@ TEST(CommandLine, BadFlagsNameTheFlag) {
   EXPECT_NE(message({"--bogus"}).find("'--bogus'"), std::string::npos);
   EXPECT_NE(message({"--frames", "ten"}).find("--frames"), std::string::npos);
   EXPECT_NE(message({"--frames", "-3"}).find("--frames"), std::string::npos);
+  // Issue 15, D14: 2^31 used to wrap to INT_MIN.
+  EXPECT_NE(message({"--save-every", "2147483648"}).find("flag --save-every: must be at most 2147483647"),
+            std::string::npos)
+      << message({"--save-every", "2147483648"});
+  EXPECT_EQ(parseRunOptions({"--save-every", "2147483647"}).save_every, 2147483647);
   EXPECT_NE(message({"--frames"}).find("needs a value"), std::string::npos);
   EXPECT_NE(message({"--source", "webcam"}).find("--source"), std::string::npos);
   EXPECT_NE(message({"--source", "images"}).find("--images"), std::string::npos);
