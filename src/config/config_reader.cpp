@@ -126,8 +126,10 @@ namespace {
 // OpenCV's YAML parser recurses once per nesting level with no limit, so a
 // file nested 50,000 deep overflows the stack (issue 15, D1). Every file
 // probelight reads is a few levels deep; the deepest flow nesting ([ and {)
-// and the deepest indentation are checked before OpenCV sees the text.
-// Empty when within the limits, else the problem with its line number.
+// and the deepest indentation are checked before OpenCV sees the text, as
+// are the integer literals it would misread (integerLiteralProblem, below,
+// which textOpenCvWouldMisreadProblem calls on each token). Empty when all is
+// well, else the problem with its line number.
 // OpenCV reads an integer literal past 32 bits wrapped (4294967297 as 1) and
 // one with a leading zero as octal (010 as 8), both silently (issue 15, D2,
 // D3): such a token, as a whole (a run of letters, digits, '.', '+', '-'),
@@ -147,7 +149,7 @@ std::optional<std::string> integerLiteralProblem(const std::string& token, int l
   return std::nullopt;
 }
 
-std::optional<std::string> nestingProblem(const std::string& text) {
+std::optional<std::string> textOpenCvWouldMisreadProblem(const std::string& text) {
   int depth = 0, line = 1, column = 0;
   bool in_comment = false, in_indent = true;
   char quote = 0;
@@ -206,7 +208,7 @@ std::optional<std::string> nestingProblem(const std::string& text) {
 
 ConfigReader ConfigReader::fromText(const std::string& yaml_text, const std::string& display_name) {
   if (yaml_text.find_first_not_of(" \t\r\n") == std::string::npos) throw ConfigError(display_name + ": file is empty");
-  if (const std::optional<std::string> problem = nestingProblem(yaml_text))
+  if (const std::optional<std::string> problem = textOpenCvWouldMisreadProblem(yaml_text))
     throw ConfigError(display_name + ": " + *problem + "; probelight's files are a few levels deep");
   // OpenCV refuses YAML without its "%YAML:1.0" first line; people writing
   // rig.yaml by hand should not have to know that.
