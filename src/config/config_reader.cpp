@@ -123,13 +123,6 @@ ConfigReader::ConfigReader(const std::string& path) {
 
 namespace {
 
-// OpenCV's YAML parser recurses once per nesting level with no limit, so a
-// file nested 50,000 deep overflows the stack (issue 15, D1). Every file
-// probelight reads is a few levels deep; the deepest flow nesting ([ and {)
-// and the deepest indentation are checked before OpenCV sees the text, as
-// are the integer literals it would misread (integerLiteralProblem, below,
-// which textOpenCvWouldMisreadProblem calls on each token). Empty when all is
-// well, else the problem with its line number.
 // OpenCV reads an integer literal past 32 bits wrapped (4294967297 as 1) and
 // one with a leading zero as octal (010 as 8), both silently (issue 15, D2,
 // D3): such a token, as a whole (a run of letters, digits, '.', '+', '-'),
@@ -149,6 +142,13 @@ std::optional<std::string> integerLiteralProblem(const std::string& token, int l
   return std::nullopt;
 }
 
+// OpenCV's YAML parser recurses once per nesting level with no limit, so a
+// file nested 50,000 deep overflows the stack (issue 15, D1). Every file
+// probelight reads is a few levels deep; the deepest flow nesting ([ and {)
+// and the deepest indentation are checked before OpenCV sees the text, as
+// are the integer literals it would misread (integerLiteralProblem, on
+// each token). Empty when all is
+// well, else the problem with its line number.
 std::optional<std::string> textOpenCvWouldMisreadProblem(const std::string& text) {
   int depth = 0, line = 1, column = 0;
   bool in_comment = false, in_indent = true;
