@@ -37,10 +37,9 @@ bool HeadlessDisplay::open(int width_px, int height_px, std::string& error) {
       return false;
     }
   }
-  // Compression level 1: PNG encoding would otherwise cost more than a frame.
-  writer_ = std::make_unique<ImageWriteQueue>([](const std::string& path, const ImageRGB8& image) {
-    return writeRgbImage(path, image, {cv::IMWRITE_PNG_COMPRESSION, 1});
-  });
+  // writeRgbPng: OpenCV's PNG writer would cost more than a frame.
+  writer_ = std::make_unique<ImageWriteQueue>(
+      [](const std::string& path, const ImageRGB8& image, std::string& error) { return writeRgbPng(path, image, error); });
   return true;
 }
 

@@ -53,13 +53,14 @@ void ImageWriteQueue::run() {
     busy_ = true;
     lock.unlock();
     changed_.notify_all();  // a slot is free
-    const bool ok = write_(path, image);
+    std::string why;
+    const bool ok = write_(path, image, why);
     lock.lock();
     busy_ = false;
     if (ok)
       ++written_;
     else if (failure_.empty())
-      failure_ = "cannot write " + path;
+      failure_ = why.empty() ? "cannot write " + path : "cannot write " + why;
     changed_.notify_all();
   }
 }

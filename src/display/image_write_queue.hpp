@@ -19,8 +19,9 @@ namespace probelight {
 
 class ImageWriteQueue {
  public:
-  // Writes `image` to `path`; false when it could not.
-  using WriteFunction = std::function<bool(const std::string& path, const ImageRGB8& image)>;
+  // Writes `image` to `path`; false when it could not, with `error` saying
+  // why (or left empty).
+  using WriteFunction = std::function<bool(const std::string& path, const ImageRGB8& image, std::string& error)>;
 
   explicit ImageWriteQueue(WriteFunction write, int depth = 2);
   ~ImageWriteQueue();  // waits for the queued writes

@@ -48,7 +48,10 @@ class SunSkyEnvironment : public Environment {
     glm::dvec3 zenith{0.3, 0.5, 1.0};
     double t = std::sqrt(elevation);
     glm::dvec3 sky = (1.0 - t) * horizon + t * zenith;
-    double angle = std::acos(std::clamp(glm::dot(dir, sun_dir_), -1.0, 1.0));
+    // The cosine first: acos only for the few directions near the sun.
+    const double cos_angle = std::clamp(glm::dot(dir, sun_dir_), -1.0, 1.0);
+    if (cos_angle <= cos_outer_edge_) return sky;
+    double angle = std::acos(cos_angle);
     if (angle < kSunRadiusRad + kSunLimbRad) {
       double weight = smoothEdge(kSunRadiusRad - angle, 2.0 * kSunLimbRad);
       sky += weight * sun_radiance_ * glm::dvec3(1.0, 0.95, 0.85);
@@ -62,33 +65,62 @@ class SunSkyEnvironment : public Environment {
   static constexpr double kSunLimbRad = 0.15 * kPi / 180.0;
   glm::dvec3 sun_dir_;
   double sun_radiance_ = 0.0;
+  // A hair wider than the disc and its limb, so rounding never drops an edge direction.
+  double cos_outer_edge_ = std::cos((kSunRadiusRad + kSunLimbRad) * 1.001);
 };
+
+// The difference of two azimuths in degrees, wrapped to [-180, 180].
+double azimuthDifferenceDeg(double a_deg, double b_deg) {
+  double d = a_deg - b_deg;
+  // Azimuths from atan2 and the boxes' own differ by less than 540 deg: one
+  // step of 360 wraps them, where std::remainder is a slow library call.
+  if (std::abs(d) > 540.0) return std::remainder(d, 360.0);
+  if (d > 180.0) return d - 360.0;
+  if (d < -180.0) return d + 360.0;
+  return d;
+}
 
 // A rectangle in (azimuth, elevation), with softened edges.
 struct AngularBox {
   double azimuth_deg, elevation_deg, width_deg, height_deg;
   glm::dvec3 radiance;
 
-  double weight(double azimuth_deg_query, double elevation_deg_query) const {
-    double daz = std::remainder(azimuth_deg_query - azimuth_deg, 360.0);
-    double del = elevation_deg_query - elevation_deg;
-    return smoothEdge(width_deg / 2 - std::abs(daz), 1.0) * smoothEdge(height_deg / 2 - std::abs(del), 1.0);
+  double elevationWeight(double elevation_deg_query) const {
+    return smoothEdge(height_deg / 2 - std::abs(elevation_deg_query - elevation_deg), 1.0);
+  }
+  double azimuthWeight(double azimuth_deg_query) const {
+    return smoothEdge(width_deg / 2 - std::abs(azimuthDifferenceDeg(azimuth_deg_query, azimuth_deg)), 1.0);
   }
 };
 
-void azimuthElevationDeg(const glm::dvec3& dir, double& azimuth_deg, double& elevation_deg) {
-  azimuth_deg = std::atan2(dir.y, dir.x) * 180.0 / kPi;
-  elevation_deg = std::asin(std::clamp(dir.z, -1.0, 1.0)) * 180.0 / kPi;
+double elevationDeg(const glm::dvec3& dir) { return std::asin(std::clamp(dir.z, -1.0, 1.0)) * 180.0 / kPi; }
+double azimuthDeg(const glm::dvec3& dir) { return std::atan2(dir.y, dir.x) * 180.0 / kPi; }
+
+// The sum of the boxes' radiance seen along dir. The azimuth (atan2) is
+// computed only when dir is within some box's band of elevations.
+template <std::size_t N>
+glm::dvec3 boxRadiance(const AngularBox (&boxes)[N], const glm::dvec3& dir, double& weight_of_first) {
+  glm::dvec3 result(0.0);
+  const double elevation = elevationDeg(dir);
+  double azimuth = 0.0;
+  bool have_azimuth = false;
+  weight_of_first = 0.0;
+  for (std::size_t i = 0; i < N; ++i) {
+    const double elevation_weight = boxes[i].elevationWeight(elevation);
+    if (elevation_weight == 0.0) continue;
+    if (!have_azimuth) azimuth = azimuthDeg(dir), have_azimuth = true;
+    const double weight = boxes[i].azimuthWeight(azimuth) * elevation_weight;
+    if (i == 0) weight_of_first = weight;
+    result += weight * boxes[i].radiance;
+  }
+  return result;
 }
 
 class StudioEnvironment : public Environment {
  public:
   glm::dvec3 radiance(const glm::dvec3& dir) const override {
-    glm::dvec3 result(0.02);
-    double az, el;
-    azimuthElevationDeg(dir, az, el);
-    for (const AngularBox& box : kBoxes) result += box.weight(az, el) * box.radiance;
-    return result;
+    double unused;
+    return glm::dvec3(0.02) + boxRadiance(kBoxes, dir, unused);
   }
   std::string name() const override { return "studio"; }
 
@@ -113,16 +145,15 @@ class ColouredWallEnvironment : public Environment {
  public:
   glm::dvec3 radiance(const glm::dvec3& dir) const override {
     glm::dvec3 sky(0.6 + 0.4 * std::max(0.0, dir.z));
-    double az, el;
-    azimuthElevationDeg(dir, az, el);
-    double wall = kWall.weight(az, el);
-    return (1.0 - wall) * sky + wall * kWall.radiance;
+    double wall = 0.0;
+    boxRadiance(kWalls, dir, wall);
+    return (1.0 - wall) * sky + wall * kWalls[0].radiance;
   }
   std::string name() const override { return "coloured_wall"; }
 
  private:
   // A wall from the horizon up to 50 deg, 120 deg wide, centred on +X.
-  static inline const AngularBox kWall = {0.0, 25.0, 120.0, 50.0, {2.4, 0.35, 0.12}};
+  static inline const AngularBox kWalls[1] = {{0.0, 25.0, 120.0, 50.0, {2.4, 0.35, 0.12}}};
 };
 
 }  // namespace

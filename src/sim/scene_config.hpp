@@ -87,7 +87,10 @@ struct SceneConfig {
   bool auto_exposure = true;
   double fixed_exposure = 1.0;  // used when auto_exposure is false
   double noise_sigma_code = 1.5;  // Gaussian, in 8-bit code values, added after sRGB encoding
-  int supersample_per_axis = 2;   // n x n regular sub-pixel samples per pixel
+  // n x n regular sub-pixel samples per pixel; 0 (needs edge samples): a
+  // pixel that no edge crosses is the mean of its four corners' radiance,
+  // about one ray a pixel (World's traceFrame says why that is as accurate).
+  int supersample_per_axis = 0;
   // Pixels that an edge crosses (object silhouettes, tag cells), and every
   // pixel showing the mirror ball (where a sun's reflection is smaller than
   // a regular sub-sample), are integrated over their area with this many
