@@ -92,9 +92,9 @@ class Analyzer {
     settings_.lights.white_reference = settings_.lights.white_reference && options_.white_reference;
     settings_.lights.post_reference = settings_.lights.post_reference && options_.post_reference;
     std::error_code ec;
-    if (!fs::exists(options_.frame_path, ec)) return Status::badInput(options_.frame_path + ": no such file (--frame)");
-    frame_bgr_ = readImageFile(options_.frame_path, cv::IMREAD_COLOR);
-    if (frame_bgr_.empty()) return Status::badInput(options_.frame_path + ": not a readable image (--frame)");
+    std::string unreadable;
+    frame_bgr_ = readImageFile(options_.frame_path, cv::IMREAD_COLOR, &unreadable);
+    if (frame_bgr_.empty()) return Status::badInput(options_.frame_path + ": " + unreadable + " (--frame)");
     if (frame_bgr_.cols != camera_.width_px || frame_bgr_.rows != camera_.height_px)
       // The calibration belongs to another resolution: every pixel position
       // derived from it would be wrong.
@@ -266,12 +266,9 @@ class Analyzer {
     Json unread = Json::array();
     std::vector<BracketCandidate> candidates;
     for (const BracketOption& bracket : options_.brackets) {
-      const cv::Mat bgr = readImageFile(bracket.path, cv::IMREAD_COLOR);
       std::string why;
-      std::error_code ec;
-      if (bgr.empty())
-        why = fs::exists(bracket.path, ec) ? "not a readable image" : "no such file";
-      else if (bgr.cols != frame_bgr_.cols || bgr.rows != frame_bgr_.rows)
+      const cv::Mat bgr = readImageFile(bracket.path, cv::IMREAD_COLOR, &why);
+      if (!bgr.empty() && (bgr.cols != frame_bgr_.cols || bgr.rows != frame_bgr_.rows))
         why = "it is " + sizeText(bgr.cols, bgr.rows) + ", --frame is " + sizeText(frame_bgr_.cols, frame_bgr_.rows);
       if (!why.empty()) {
         unread.push_back({{"frame", bracket.path}, {"ev", bracket.ev}, {"used", false}, {"reason", why}});

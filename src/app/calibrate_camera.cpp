@@ -128,9 +128,10 @@ int runCalibrateCamera(const CalibrateCameraOptions& options, std::ostream& out,
   };
   for (const std::string& path : files) {
     // Grey is what the detector and cornerSubPix work on; colour adds nothing.
-    const cv::Mat grey = readImageFile(path, cv::IMREAD_GRAYSCALE);
+    std::string why;
+    const cv::Mat grey = readImageFile(path, cv::IMREAD_GRAYSCALE, &why);
     if (grey.empty()) {
-      reject(path, "unreadable (not an image OpenCV can decode)");
+      reject(path, why);
       continue;
     }
     if (image_size.empty()) image_size = grey.size();

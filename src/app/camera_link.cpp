@@ -47,8 +47,7 @@ CameraEvent CameraLink::next(FrameLease& lease) {
       onLost(source_.lastError());
       return CameraEvent::kLost;
     }
-    log_ << logPrefix(LogPriority::kError) << "probelight: " << source_.name() << ": " << source_.lastError() << "\n";
-    return CameraEvent::kEnded;
+    return CameraEvent::kFailed;
   }
   consecutive_timeouts_ = 0;
   ++frames_since_start_;

@@ -24,6 +24,7 @@ enum class CameraEvent {
   kNoFrame,  // none yet (a timeout, said): ask again
   kLost,     // the camera just went away: it is being reconnected
   kEnded,    // the stream ended, or the camera is gone for good: stop
+  kFailed,   // a source that cannot reconnect failed (a folder with no decodable image): stop, exit 2
 };
 
 class CameraLink {

@@ -122,6 +122,8 @@ class Kiosk {
       FrameLease lease;
       const CameraEvent event = camera_->next(lease);
       if (event == CameraEvent::kEnded) return Status::ok();
+      // The report is still written (the caller does), with what ran.
+      if (event == CameraEvent::kFailed) return Status::badInput(source_->name() + ": " + source_->lastError());
       if (event == CameraEvent::kLost) lights_->onCameraLost();
       if (event != CameraEvent::kFrame) continue;
       FrameContext ctx(*lease, frames_done_++);
@@ -245,6 +247,15 @@ class Kiosk {
 
   // --- set-up ---------------------------------------------------------------
 
+  static Status createFolder(const std::string& path, const char* flag) {
+    std::error_code ec;
+    fs::create_directories(path, ec);
+    if (ec || !fs::is_directory(path))
+      return Status::badInput(path + ": cannot create the folder (" + flag + ")" +
+                              (ec ? ": " + ec.message() : std::string()));
+    return Status::ok();
+  }
+
   // Reads every file, then opens source, display, stages and button, in that
   // order, so that a bad file costs nothing but its message.
   Status setUp() {
@@ -253,14 +264,10 @@ class Kiosk {
     } catch (const config::ConfigError& error) {
       return Status::badInput(error.what());
     }
-    if (!options_.capture_dir.empty()) {
-      // Made now, so that a folder that cannot be made costs nothing but its message.
-      std::error_code ec;
-      fs::create_directories(options_.capture_dir, ec);
-      if (ec || !fs::is_directory(options_.capture_dir))
-        return Status::badInput(options_.capture_dir + ": cannot create the folder (--capture)" +
-                                (ec ? ": " + ec.message() : std::string()));
-    }
+    // Made now, so that a folder that cannot be made costs nothing but its
+    // message; --out holds report.json whichever the display.
+    PROBELIGHT_TRY(createFolder(options_.out_dir, "--out"));
+    if (!options_.capture_dir.empty()) PROBELIGHT_TRY(createFolder(options_.capture_dir, "--capture"));
     PROBELIGHT_TRY(makeSource());
     const AppSettings& settings = inputs_.settings;
     std::string error;
@@ -297,6 +304,23 @@ class Kiosk {
     return Status::ok();
   }
 
+  // Which file or flag a simulator's complaint is about ("" when the values
+  // are the built-in ones), so that its one line names it.
+  std::string simulatorInputName(const std::string& message) const {
+    auto startsWith = [&](const char* prefix) { return message.rfind(prefix, 0) == 0; };
+    auto setting = [&](const std::string& flag_value, const char* flag, const char* field) -> std::string {
+      if (!flag_value.empty()) return std::string(flag) + ": ";
+      if (!options_.config_path.empty()) return options_.config_path + ": field '" + field + "': ";
+      return "";
+    };
+    if (startsWith("environment")) return setting(options_.sim_env, "--env", "sim.env");
+    if (startsWith("camera_path")) return setting(options_.sim_path, "--path", "sim.camera_path");
+    if (startsWith("rig.") && inputs_.rig_from_file) return options_.rig_path + ": the simulator cannot stage it: ";
+    if (startsWith("camera") && inputs_.camera_from_file) return options_.camera_path + ": the simulator cannot use it: ";
+    if (startsWith("random camera pose")) return inputs_.rig_from_file ? options_.rig_path + ": " : "";
+    return "";
+  }
+
   Status makeSimulatedCamera() {
     const AppSettings& settings = inputs_.settings;
     sim::SceneConfig scene = sim::defaultScene();
@@ -318,7 +342,7 @@ class Kiosk {
     try {
       world_ = std::make_shared<const sim::World>(scene);
     } catch (const sim::SceneError& error) {
-      return Status::badInput(error.what());
+      return Status::badInput(simulatorInputName(error.what()) + error.what());
     }
     SimCameraOptions camera_options;
     camera_options.layout = settings.sim.pixel_format == "yuv420" ? PixelLayout::kI420

@@ -82,13 +82,15 @@ ThreadedFrameSource::Produced ImageFrameSource::produce(std::uint64_t index, Fra
   // files ends (or fails, when looping) instead of spinning.
   for (std::size_t attempts = 0; attempts < files_.size(); ++attempts) {
     if (next_file_ >= files_.size()) {
-      if (!loop_) return Produced::kEndOfStream;
+      if (!loop_ && frames_delivered_ > 0) return Produced::kEndOfStream;
+      if (!loop_) break;
       next_file_ = 0;
     }
     const std::string& path = files_[next_file_++];
-    cv::Mat bgr = readImageFile(path, cv::IMREAD_COLOR);
+    std::string why;
+    cv::Mat bgr = readImageFile(path, cv::IMREAD_COLOR, &why);
     if (bgr.empty()) {
-      std::cerr << "probelight: warning: skipping '" << path << "': not a readable image\n";
+      std::cerr << "probelight: warning: skipping '" << path << "': " << why << "\n";
       continue;
     }
     rgbFromBgr(bgr, buffer.rgb);
@@ -98,9 +100,10 @@ ThreadedFrameSource::Produced ImageFrameSource::produce(std::uint64_t index, Fra
     buffer.metadata.timestamp_ns =
         std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
     buffer.metadata.origin = path;
+    ++frames_delivered_;
     return Produced::kFrame;
   }
-  if (next_file_ >= files_.size() && !loop_) return Produced::kEndOfStream;
+  if (next_file_ >= files_.size() && !loop_ && frames_delivered_ > 0) return Produced::kEndOfStream;
   error = "image source: none of the " + std::to_string(files_.size()) + " files of '" + folder_or_pattern_ +
           "' could be decoded";
   return Produced::kError;

@@ -35,6 +35,7 @@ class ImageFrameSource : public ThreadedFrameSource {
   bool loop_;
   std::vector<std::string> files_;
   std::size_t next_file_ = 0;
+  std::uint64_t frames_delivered_ = 0;  // a replay that decodes nothing is an error, not an empty run
 };
 
 }  // namespace probelight

@@ -2,6 +2,7 @@
 // image files: the one place the channel order is swapped.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -26,9 +27,22 @@ bool writeRgbImage(const std::string& path, const ImageRGB8& rgb, const std::vec
 // 2.5x faster than cv::imwrite at compression 1, and 15% smaller. False, with
 // `error` saying why, when the file cannot be written.
 bool writeRgbPng(const std::string& path, const ImageRGB8& rgb, std::string& error);
-// cv::imread that cannot throw: OpenCV throws (instead of returning an empty
-// image) when a file's header claims more pixels than it allows, e.g. a
-// 69-byte PNG that says 65535x65535. Empty then, as for any unreadable file.
-cv::Mat readImageFile(const std::string& path, int imread_flags);
+// The largest image file read (a full-size 8192x8192 16-bit PNG is smaller).
+constexpr std::uint64_t kMaxImageFileBytes = 1ull << 30;
+
+// cv::imread made safe for files from users. Empty, with `why` saying why
+// (one phrase, no path), when `path`:
+// - does not exist, or is not a regular file (a FIFO would block the read
+//   forever, a folder or device is no image);
+// - is larger than kMaxImageFileBytes;
+// - has a header (PNG, JPEG, BMP, PNM) claiming a side above
+//   kMaxImageSidePx: refused before anything is decoded, where OpenCV would
+//   decode a 20000x20000 PNG of 1 MB into 1.2 GB first;
+// - is a PNG or JPEG cut short (no IEND chunk, no end-of-image marker after
+//   the scan), which OpenCV decodes with the missing rows grey and only a
+//   libjpeg warning;
+// - cannot be decoded (OpenCV throws instead of returning an empty image
+//   when a header claims more pixels than it allows).
+cv::Mat readImageFile(const std::string& path, int imread_flags, std::string* why = nullptr);
 
 }  // namespace probelight

@@ -20,8 +20,8 @@ CameraIntrinsics loadCameraFile(const std::string& path);
 // ConfigError when `camera` would not load back or the file cannot be written.
 void saveCameraFile(const std::string& path, const CameraIntrinsics& camera);
 
-// Plausibility bounds (validateCameraIntrinsics says why each).
-constexpr int kMaxImageSidePx = 8192;
+// Plausibility bounds (validateCameraIntrinsics says why each); the image
+// sides' is probelight::kMaxImageSidePx (core/types.hpp).
 constexpr double kMinFocalPerSide = 0.1;   // x the image's larger side
 constexpr double kMaxFocalPerSide = 50.0;
 constexpr double kMaxDistortion[5] = {100.0, 100.0, 1.0, 1.0, 1000.0};  // |k1| |k2| |p1| |p2| |k3|

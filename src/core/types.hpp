@@ -71,6 +71,10 @@ struct LumaView {
   int stride = 0;  // bytes per row
 };
 
+// The largest image side probelight accepts anywhere: camera.yaml's sizes
+// and the frames it reads (8K; the kiosk's camera modes are far smaller).
+constexpr int kMaxImageSidePx = 8192;
+
 // Tightly packed 8-bit RGB image (camera-encoded, sRGB by default).
 struct ImageRGB8 {
   int width = 0;

@@ -14,6 +14,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -530,16 +531,89 @@ TEST_F(Analyze, AFrameWhoseHeaderClaimsFourBillionPixelsIsExit2NamingIt) {
                                    " --rig " + (dir_ / "rig.yaml").string() + " --out " + (dir_ / "out").string());
   EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
   expectOneLine(result);
-  EXPECT_NE(result.stderr_text.find(huge.string() + ": not a readable image"), std::string::npos) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find(huge.string() + ": its header says 65535x65535"), std::string::npos)
+      << result.stderr_text;
 
-  // The same file among the frames `run --source images` replays: skipped
-  // with a warning naming it, and no crash (a crash shows as 128 + the signal).
+  // The same file as all `run --source images` has to replay: skipped with a
+  // warning naming it, no crash (a crash shows as 128 + the signal), and,
+  // with no frame left to show, exit 2 saying so (not an empty run, exit 0).
   const CommandResult replay = run("run --source images --images " + huge.string() + " --camera " +
                                    (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
                                    " --display headless --frames 1 --out " + (dir_ / "replay").string());
-  EXPECT_EQ(replay.exit_status, 0) << replay.stderr_text;
-  EXPECT_NE(replay.stderr_text.find("skipping '" + huge.string() + "': not a readable image"), std::string::npos)
+  EXPECT_EQ(replay.exit_status, 2) << replay.stderr_text;
+  EXPECT_NE(replay.stderr_text.find("skipping '" + huge.string() + "': its header says 65535x65535"),
+            std::string::npos)
       << replay.stderr_text;
+  EXPECT_NE(replay.stderr_text.find("none of the 1 files"), std::string::npos) << replay.stderr_text;
+}
+
+// Frames a hostile or careless user gives (issue 15, D10, D11): a FIFO,
+// which would block the read forever, and a JPEG cut to 90 %, which OpenCV
+// decodes with grey rows and only a libjpeg warning. Each is exit 2 with one
+// line naming the file and saying what is wrong; nothing is analysed.
+TEST_F(Analyze, AFifoOrACutJpegAsTheFrameIsExit2NamingIt) {
+  config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
+  config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
+  const fs::path fifo = dir_ / "frame.png";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::vector<std::uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", cv::Mat(480, 640, CV_8UC3, cv::Scalar(40, 90, 160)), jpeg));
+  jpeg.resize(jpeg.size() * 9 / 10);
+  const fs::path cut = dir_ / "cut.jpg";
+  std::ofstream(cut, std::ios::binary).write(reinterpret_cast<const char*>(jpeg.data()),
+                                             static_cast<std::streamsize>(jpeg.size()));
+  for (const auto& [frame, says] : {std::pair{fifo, "not a regular file"}, std::pair{cut, "cut short"}}) {
+    const CommandResult result = run("analyze --frame " + frame.string() + " --camera " +
+                                     (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
+                                     " --out " + (dir_ / "out").string());
+    EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
+    expectOneLine(result);
+    EXPECT_NE(result.stderr_text.find(frame.string() + ": "), std::string::npos) << result.stderr_text;
+    EXPECT_NE(result.stderr_text.find(says), std::string::npos) << result.stderr_text;
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "analysis.json")) << "nothing ran";
+  }
+}
+
+// What the simulator refuses is named by the file or flag it came from
+// (issue 15, D13): an unknown sim.env in probelight.yaml, the shipped
+// board/rig.yaml (its ball stands lower than the simulator can stage), and
+// --env.
+TEST_F(Analyze, SimulatorComplaintsNameTheFileAndField) {
+  const fs::path config = dir_ / "probelight.yaml";
+  std::ofstream(config) << "sim:\n  env: abc\n";
+  const std::string board_rig = std::string(PROBELIGHT_TEST_DATA_DIR) + "/../../board/rig.yaml";
+  const std::string out = " --display headless --frames 1 --out " + (dir_ / "out").string();
+  const std::pair<std::string, std::string> cases[] = {
+      {"--config " + config.string(), config.string() + ": field 'sim.env': environment 'abc'"},
+      {"--rig " + board_rig, board_rig + ": the simulator cannot stage it: rig.probe_center"},
+      {"--env nope", "--env: environment 'nope'"},
+  };
+  for (const auto& [flags, says] : cases) {
+    const CommandResult result = run("run --source sim " + flags + out);
+    EXPECT_EQ(result.exit_status, 2) << flags << ": " << result.stderr_text;
+    expectOneLine(result);
+    EXPECT_NE(result.stderr_text.find(says), std::string::npos) << result.stderr_text;
+  }
+}
+
+// An --out that cannot be made is a flag the user gave: exit 2 with one
+// line, in `run` as in `analyze` (issue 15, D18; `run` used to say 1).
+TEST_F(Analyze, AnOutFolderThatCannotBeMadeIsExit2InRunAndAnalyze) {
+  config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
+  config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
+  std::ofstream(dir_ / "a_file") << "not a folder";
+  const std::string out = (dir_ / "a_file" / "out").string();
+  const CommandResult kiosk = run("run --source sim --display headless --frames 1 --out " + out);
+  EXPECT_EQ(kiosk.exit_status, 2) << kiosk.stderr_text;
+  expectOneLine(kiosk);
+  EXPECT_NE(kiosk.stderr_text.find(out + ": cannot create the folder (--out)"), std::string::npos) << kiosk.stderr_text;
+  cv::imwrite((dir_ / "frame.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(90, 90, 90)));
+  const CommandResult analysis = run("analyze --frame " + (dir_ / "frame.png").string() + " --camera " +
+                                     (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
+                                     " --out " + out);
+  EXPECT_EQ(analysis.exit_status, 2) << analysis.stderr_text;
+  expectOneLine(analysis);
+  EXPECT_NE(analysis.stderr_text.find(out), std::string::npos) << analysis.stderr_text;
 }
 
 TEST_F(Analyze, FrameOfAnotherSizeIsExit2NamingBothSizes) {
@@ -731,7 +805,7 @@ TEST_F(AnalyzeBracket, MergedBracketMatchesTheHdrTruthAndBadFramesAreLeftOut) {
   EXPECT_NE(reasons["under3.png@-5"].find("its pixels say EV -3"), std::string::npos) << reasons["under3.png@-5"];
   EXPECT_NE(reasons["black.png@-15"].find("black"), std::string::npos);
   EXPECT_NE(reasons["white.png@-1"].find("clipped everywhere"), std::string::npos) << reasons["white.png@-1"];
-  EXPECT_NE(reasons["notes.png@-2"].find("not a readable image"), std::string::npos) << reasons["notes.png@-2"];
+  EXPECT_NE(reasons["notes.png@-2"].find("not an image OpenCV can decode"), std::string::npos) << reasons["notes.png@-2"];
   EXPECT_TRUE(reasons.find("moved.png@-3") == reasons.end()) << reasons["moved.png@-3"];
   EXPECT_NE(reasons["far.png@-3"].find("the camera moved too far"), std::string::npos) << analysis["hdr"]["frames"].dump(1);
   // One warning line per frame left out.

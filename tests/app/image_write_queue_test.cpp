@@ -10,8 +10,6 @@
 #include <thread>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
-
 #include "capture/rgb_image_io.hpp"
 #include "display/image_write_queue.hpp"
 
@@ -98,44 +96,6 @@ TEST(ImageWriteQueue, AFailedWriteIsReportedWithTheFileName) {
   EXPECT_FALSE(queue.push(::testing::TempDir() + "/ok.png", imageOfValue(8), again));
   EXPECT_NE(again.find(bad), std::string::npos) << again;
   EXPECT_EQ(queue.written(), 0);
-}
-
-// writeRgbPng is lossless and in probelight's RGB order: every byte of an
-// image with noise, sharp edges and odd dimensions (each row filtered
-// against the one above) comes back through an independent decoder
-// (OpenCV's), channels swapped to its BGR.
-TEST(WriteRgbPng, EveryByteComesBackThroughOpenCvsDecoder) {
-  ImageRGB8 image;
-  image.resize(37, 23);
-  std::uint32_t state = 12345;
-  for (std::size_t i = 0; i < image.pixels.size(); ++i) {
-    state = state * 1664525u + 1013904223u;
-    image.pixels[i] = (i / 3) % 37 < 11 ? static_cast<std::uint8_t>(i % 3 == 0 ? 255 : 0)
-                                        : static_cast<std::uint8_t>(state >> 24);
-  }
-  const std::string path = ::testing::TempDir() + "/probelight-write-rgb-png.png";
-  std::string error;
-  ASSERT_TRUE(writeRgbPng(path, image, error)) << error;
-  const cv::Mat back = cv::imread(path, cv::IMREAD_UNCHANGED);
-  ASSERT_EQ(back.type(), CV_8UC3);
-  ASSERT_EQ(back.cols, 37);
-  ASSERT_EQ(back.rows, 23);
-  int mismatches = 0;
-  for (int y = 0; y < back.rows; ++y)
-    for (int x = 0; x < back.cols; ++x)
-      for (int c = 0; c < 3; ++c)
-        mismatches += back.at<cv::Vec3b>(y, x)[2 - c] != image.pixels[(static_cast<std::size_t>(y) * 37 + x) * 3 + c];
-  EXPECT_EQ(mismatches, 0);
-  std::filesystem::remove(path);
-}
-
-TEST(WriteRgbPng, AnEmptyImageOrAnUnwritablePathIsAnErrorNamingTheFile) {
-  std::string error;
-  EXPECT_FALSE(writeRgbPng(::testing::TempDir() + "/empty.png", ImageRGB8{}, error));
-  EXPECT_NE(error.find("empty.png"), std::string::npos) << error;
-  const std::string folder = ::testing::TempDir();  // a folder cannot be opened for writing
-  EXPECT_FALSE(writeRgbPng(folder, imageOfValue(3), error));
-  EXPECT_NE(error.find(folder), std::string::npos) << error;
 }
 
 }  // namespace
