@@ -71,8 +71,10 @@ BracketOption parseBracket(const std::string& flag, const std::string& text) {
   BracketOption bracket;
   bracket.path = text.substr(0, at);
   bracket.ev = parseNumberList(flag, text.substr(at + 1), 1, false, "FILE@EV with EV a number of stops")[0];
-  if (std::abs(bracket.ev) > 24.0 || bracket.ev == 0.0)
-    throw UsageError("flag " + flag + ": EV must be non-zero and within +-24 stops, got '" + text + "'");
+  // Below an eighth of a stop a frame adds no range to --frame's (cameras
+  // step exposure in thirds); 1e-300 passed a "non-zero" check.
+  if (std::abs(bracket.ev) > kMaxBracketEv || std::abs(bracket.ev) < kMinBracketEv)
+    throw UsageError("flag " + flag + ": EV must be 0.125 to 24 stops either way from --frame's, got '" + text + "'");
   return bracket;
 }
 
@@ -304,6 +306,14 @@ std::vector<Switch> lightSwitches(AnalyzeOptions& options) {
 
 }  // namespace
 
+// Each bracket frame is decoded and kept while merging: 40 of them is a
+// mistake (a glob gone wide), not a bracket; the kiosk's own has 5.
+void checkBracketCount(const AnalyzeOptions& options) {
+  if (options.brackets.size() > kMaxBracketFrames)
+    throw UsageError("flag --bracket: at most " + std::to_string(kMaxBracketFrames) + " bracket frames, got " +
+                     std::to_string(options.brackets.size()));
+}
+
 AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
   AnalyzeOptions options;
   parseFlags(args, kAnalyze, frameFlags(options, "where analysis.json and the pictures go"), lightSwitches(options));
@@ -313,6 +323,7 @@ AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
   if (options.camera_path.empty()) throw UsageError("analyze needs --camera camera.yaml (the calibration of the camera that took it)");
   if (options.rig_path.empty()) throw UsageError("analyze needs --rig rig.yaml");
   if (options.out_dir.empty()) throw UsageError("analyze needs --out DIR (where analysis.json and the pictures go)");
+  checkBracketCount(options);
   return options;
 }
 
@@ -356,6 +367,7 @@ RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
   if (options.frame.camera_path.empty()) throw UsageError("render needs --camera camera.yaml (the calibration of the camera that took it)");
   if (options.frame.rig_path.empty()) throw UsageError("render needs --rig rig.yaml");
   if (options.frame.out_dir.empty()) throw UsageError("render needs --out DIR (where composite.png and analysis.json go)");
+  checkBracketCount(options.frame);
   if (options.object == "sphere" && options.radius_m == 0.0) throw UsageError("render needs --radius METRES for a sphere");
   if (options.object == "box" && !have_size) throw UsageError("render needs --size X,Y,Z (metres) for a box");
   if (options.object == "sphere" && have_size) throw UsageError("flag --size: only for --object box");

@@ -55,6 +55,10 @@ struct BracketOption {
   std::string path;
   double ev = 0.0;
 };
+// Bounds on --bracket (command_line.cpp says why).
+inline constexpr double kMinBracketEv = 0.125;
+inline constexpr double kMaxBracketEv = 24.0;
+inline constexpr std::size_t kMaxBracketFrames = 16;
 
 struct AnalyzeOptions {
   std::string frame_path;   // the camera frame (PNG, JPEG, ...)

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <regex>
+#include <set>
 #include <sstream>
 
 namespace probelight::config {
@@ -378,6 +379,20 @@ cv::Mat ConfigReader::readMat(std::string_view name, int rows, int cols) {
   } else if (node.isMap()) {
     if (node["rows"].empty() || node["cols"].empty() || node["data"].empty())
       fail(name, "expected an !!opencv-matrix with rows, cols, dt and data");
+    // OpenCV reads the first of duplicate keys and ignores unknown ones;
+    // either is a file that does not say what it seems to (issue 15, D9).
+    std::set<std::string> keys;
+    for (cv::FileNodeIterator it = node.begin(); it != node.end(); ++it) {
+      const std::string key = (*it).name();
+      if (key != "rows" && key != "cols" && key != "dt" && key != "data")
+        fail(name, "unknown key '" + key + "' in the !!opencv-matrix (it holds rows, cols, dt and data)");
+      if (!keys.insert(key).second) fail(name, "key '" + key + "' appears twice in the !!opencv-matrix");
+    }
+    // An integer type would round the values, u (8-bit) saturate them: a
+    // focal length of 600 read as 255 gives a plausible, wrong pose (D8).
+    const std::string type = node["dt"].isString() ? node["dt"].string() : std::string();
+    if (type != "d" && type != "f")
+      fail(name, "dt '" + type + "' would round or saturate the values; calibration matrices are dt: d (or f)");
     try {
       cv::read(node, matrix, cv::Mat());
     } catch (const cv::Exception& e) {

@@ -1,5 +1,6 @@
 #include "input/button_source.hpp"
 #include "input/gpio_button.hpp"
+#include "input/key_line_reader.hpp"
 
 #include <cerrno>
 #include <cstring>
@@ -69,7 +70,7 @@ bool KeyButton::start(std::string& error) {
 }
 
 void KeyButton::readLoop() {
-  std::string line;
+  KeyLineReader reader;
   char buffer[256];
   while (!stopping_) {
     pollfd fds[2] = {{fd_, POLLIN, 0}, {wake_pipe_[0], POLLIN, 0}};
@@ -81,19 +82,15 @@ void KeyButton::readLoop() {
     if (!(fds[0].revents & (POLLIN | POLLHUP))) continue;
     ssize_t n = read(fd_, buffer, sizeof buffer);
     if (n <= 0) return;  // end of stdin or of a regular file: no more presses
-    for (ssize_t i = 0; i < n; ++i) {
-      if (buffer[i] != '\n') {
-        line.push_back(buffer[i]);
-        continue;
-      }
+    for (const KeyLineReader::Line& line : reader.feed(buffer, static_cast<std::size_t>(n))) {
       ButtonEvent::Kind kind;
-      if (parseLine(line, kind)) {
+      if (!line.cut && parseLine(line.text, kind)) {
         std::lock_guard<std::mutex> lock(mutex_);
         pending_.push_back({kind, std::chrono::steady_clock::now()});
       } else {
-        std::cerr << "probelight: key button: ignoring input '" << line << "' (r or Enter = recalibrate)\n";
+        std::cerr << "probelight: key button: ignoring input '" << KeyLineReader::printable(line.text, line.cut)
+                  << "' (r or Enter = recalibrate)\n";
       }
-      line.clear();
     }
   }
 }

@@ -122,46 +122,80 @@ std::optional<StoredLighting> loadLighting(const std::filesystem::path& state_di
       error = path.string() + ": not a probelight lighting file (format)";
       return std::nullopt;
     }
-    auto vec3 = [](const nlohmann::json& v) {
-      const glm::dvec3 value(v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>());
-      if (!std::isfinite(value.x) || !std::isfinite(value.y) || !std::isfinite(value.z))
-        throw std::runtime_error("a number is not finite");
+    // Every value is checked against what a fit can produce, so a file
+    // edited by hand or damaged on disk is refused whole, with the field
+    // named, and the kiosk starts as if there were none.
+    auto fail = [](const std::string& field, const std::string& what) {
+      throw std::runtime_error("field '" + field + "': " + what);
+    };
+    auto number = [&](const nlohmann::json& v, const std::string& field, double low, double high) {
+      if (!v.is_number()) fail(field, "not a number");
+      const double value = v.get<double>();
+      if (!(value >= low && value <= high))
+        fail(field, nlohmann::json(value).dump() + " is outside [" + nlohmann::json(low).dump() + ", " +
+                        nlohmann::json(high).dump() + "]");
       return value;
+    };
+    auto vec3 = [&](const nlohmann::json& v, const std::string& field, double low, double high) {
+      if (!v.is_array() || v.size() != 3) fail(field, "not 3 numbers");
+      return glm::dvec3(number(v[0], field + "[0]", low, high), number(v[1], field + "[1]", low, high),
+                        number(v[2], field + "[2]", low, high));
+    };
+    auto direction = [&](const nlohmann::json& v, const std::string& field) {
+      const glm::dvec3 d = vec3(v, field, -1.0, 1.0);
+      if (!(std::abs(glm::length(d) - 1.0) < 1e-6)) fail(field, "not a unit direction");
+      return d;
+    };
+    auto array = [&](const nlohmann::json& v, const std::string& field, std::size_t low, std::size_t high) {
+      if (!v.is_array()) fail(field, "not a list");
+      if (v.size() < low || v.size() > high)
+        fail(field, std::to_string(v.size()) + " entries, outside [" + std::to_string(low) + ", " +
+                        std::to_string(high) + "]");
+      return v;
     };
     StoredLighting stored;
     stored.placement = json.value("placement", "");
-    for (const auto& l : json.at("lights")) {
+    const nlohmann::json& lights = array(json.at("lights"), "lights", 1, kMaxStoredLights);
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+      const std::string field = "lights[" + std::to_string(i) + "]";
+      const nlohmann::json& l = lights[i];
       ibl::DomeLight light;
-      light.direction_w = vec3(l.at("direction"));
-      light.rgb = vec3(l.at("rgb"));
-      light.spread_rad = l.at("spread_rad").get<double>();
-      light.solid_angle_sr = l.value("solid_angle_sr", 0.0);
-      if (!(std::abs(glm::length(light.direction_w) - 1.0) < 1e-6) || light.rgb.r < 0 || light.rgb.g < 0 ||
-          light.rgb.b < 0 || !(light.spread_rad >= 0.0))
-        throw std::runtime_error("a light is not a unit direction with a non-negative colour");
+      light.direction_w = direction(l.at("direction"), field + ".direction");
+      light.rgb = vec3(l.at("rgb"), field + ".rgb", 0.0, kMaxStoredRadiance);
+      light.spread_rad = number(l.at("spread_rad"), field + ".spread_rad", 0.0, M_PI);
+      light.solid_angle_sr =
+          number(l.value("solid_angle_sr", nlohmann::json(0.0)), field + ".solid_angle_sr", 0.0, 4.0 * M_PI);
       stored.lights.push_back(light);
     }
     const auto& d = json.at("dominant_light");
+    if (!d.at("found").is_boolean()) fail("dominant_light.found", "not true or false");
     stored.dominant.found = d.at("found").get<bool>();
-    stored.dominant.direction_w = vec3(d.at("direction"));
-    stored.dominant.rgb = vec3(d.at("rgb"));
-    for (const auto& l : json.value("clipped_lights", nlohmann::json::array())) {
+    stored.dominant.rgb = vec3(d.at("rgb"), "dominant_light.rgb", 0.0, kMaxStoredRadiance);
+    // A fit that found none stores a zero direction.
+    stored.dominant.direction_w = stored.dominant.found ? direction(d.at("direction"), "dominant_light.direction")
+                                                        : vec3(d.at("direction"), "dominant_light.direction", -1.0, 1.0);
+    const nlohmann::json& clipped =
+        array(json.value("clipped_lights", nlohmann::json::array()), "clipped_lights", 0, kMaxStoredLights);
+    for (std::size_t i = 0; i < clipped.size(); ++i) {
+      const std::string field = "clipped_lights[" + std::to_string(i) + "]";
+      const nlohmann::json& l = clipped[i];
       ibl::ClippedLight light;
-      light.direction_w = vec3(l.at("direction"));
-      light.irradiance_rgb = vec3(l.at("irradiance_rgb"));
-      light.texels = l.at("texels").get<std::vector<std::uint32_t>>();
-      light.texel_share = l.at("texel_share").get<std::vector<float>>();
-      const double share = l.at("share_at_fit").get<double>();
-      if (!(std::abs(glm::length(light.direction_w) - 1.0) < 1e-6) || light.irradiance_rgb.r < 0 ||
-          light.irradiance_rgb.g < 0 || light.irradiance_rgb.b < 0 || light.texels.size() != light.texel_share.size() ||
-          !(share >= 0.0 && share <= 1.0))
-        throw std::runtime_error("a clipped light is not a unit direction with a non-negative irradiance and its texels");
+      light.direction_w = direction(l.at("direction"), field + ".direction");
+      light.irradiance_rgb = vec3(l.at("irradiance_rgb"), field + ".irradiance_rgb", 0.0, kMaxStoredRadiance);
+      const nlohmann::json& texels = array(l.at("texels"), field + ".texels", 0, kMaxStoredTexels);
+      const nlohmann::json& shares = array(l.at("texel_share"), field + ".texel_share", texels.size(), texels.size());
+      for (std::size_t k = 0; k < texels.size(); ++k) {
+        // Read as a number first: get<uint32_t> would turn -1 into 4294967295.
+        light.texels.push_back(static_cast<std::uint32_t>(
+            number(texels[k], field + ".texels[" + std::to_string(k) + "]", 0.0, kMaxStoredTexels - 1.0)));
+        light.texel_share.push_back(
+            static_cast<float>(number(shares[k], field + ".texel_share[" + std::to_string(k) + "]", 0.0, 1.0)));
+      }
       stored.clipped_lights.push_back(std::move(light));
-      stored.clipped_share_at_fit.push_back(share);
+      stored.clipped_share_at_fit.push_back(number(l.at("share_at_fit"), field + ".share_at_fit", 0.0, 1.0));
     }
-    stored.exposure_at_fit = json.value("exposure_at_fit", 1.0);
-    if (!(stored.exposure_at_fit > 0.0) || !std::isfinite(stored.exposure_at_fit))
-      throw std::runtime_error("exposure_at_fit is not a positive number");
+    stored.exposure_at_fit =
+        number(json.value("exposure_at_fit", nlohmann::json(1.0)), "exposure_at_fit", kMinStoredExposure, kMaxStoredExposure);
     return stored;
   } catch (const std::exception& e) {
     error = path.string() + ": " + e.what();

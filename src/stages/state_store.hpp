@@ -37,6 +37,18 @@ struct StoredLighting {
   double exposure_at_fit = 1.0;
 };
 
+// What loadLighting accepts; anything else is a damaged or hand-edited file.
+// Lights: lights.count's range. Radiance: a half-float map (the largest
+// storage) holds at most 65504 per texel, 8.2e5 over the whole sphere, so no
+// fit gives more than 1e6. Texels: six faces of maps.face_size's largest,
+// 1024. Exposure (time in microseconds x gain; 1 when unknown): 1e-3 to 1e9
+// spans any sensor's shortest and longest.
+inline constexpr std::size_t kMaxStoredLights = 64;
+inline constexpr double kMaxStoredRadiance = 1e6;
+inline constexpr std::size_t kMaxStoredTexels = 6u * 1024u * 1024u;
+inline constexpr double kMinStoredExposure = 1e-3;
+inline constexpr double kMaxStoredExposure = 1e9;
+
 // <dir>/lighting.json.
 std::filesystem::path lightingStatePath(const std::filesystem::path& state_dir);
 bool saveLighting(const std::filesystem::path& state_dir, const StoredLighting& lighting, std::string& error);

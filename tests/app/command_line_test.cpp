@@ -131,6 +131,29 @@ TEST(CommandLine, ARepeatedFlagTakesItsLastValue) {
   EXPECT_EQ(analyze.brackets[1].ev, 2.0);
 }
 
+// An EV of 1e-300 passed the old "non-zero" check, and 40 frames of one
+// view were all decoded and merged (issue 15, D17).
+TEST(CommandLine, BracketEvsBelowAnEighthOfAStopAndMoreThan16FramesAreRefused) {
+  auto analyzeWith = [](const std::vector<std::string>& brackets) {
+    std::vector<std::string> args = {"--frame", "a.png", "--camera", "c.yaml", "--rig", "r.yaml", "--out", "o"};
+    for (const std::string& b : brackets) args.insert(args.end(), {"--bracket", b});
+    try {
+      parseAnalyzeOptions(args);
+    } catch (const UsageError& error) {
+      return std::string(error.what());
+    }
+    return std::string();
+  };
+  for (const char* bad : {"u.png@1e-300", "u.png@0", "u.png@-0.1", "u.png@25"})
+    EXPECT_NE(analyzeWith({bad}).find("EV must be 0.125 to 24 stops"), std::string::npos) << bad << ": " << analyzeWith({bad});
+  EXPECT_EQ(analyzeWith({"u.png@-0.125", "o.png@24"}), "");
+  std::vector<std::string> many;
+  for (int i = 1; i <= 17; ++i) many.push_back("f" + std::to_string(i) + ".png@-" + std::to_string(i));
+  EXPECT_NE(analyzeWith(many).find("at most 16 bracket frames, got 17"), std::string::npos) << analyzeWith(many);
+  many.pop_back();
+  EXPECT_EQ(analyzeWith(many), "");
+}
+
 TEST(CommandLine, UsageErrorsAreOneLineNamingTheFlag) {
   EXPECT_NE(message({"-n"}).find("flag --frames needs a value"), std::string::npos) << message({"-n"});
   EXPECT_NE(message({"--frames="}).find("flag --frames needs a value"), std::string::npos);

@@ -11,6 +11,7 @@
 
 #include "input/button_source.hpp"
 #include "input/gpio_button.hpp"
+#include "input/key_line_reader.hpp"
 
 namespace probelight {
 namespace {
@@ -24,6 +25,31 @@ TEST(KeyButton, ParsesLines) {
   ASSERT_TRUE(KeyButton::parseLine("long", kind));
   EXPECT_EQ(kind, ButtonEvent::Kind::kLongPress);
   EXPECT_FALSE(KeyButton::parseLine("x", kind));
+}
+
+// 10 MB without a newline used to be buffered whole (+23 MB RSS) and echoed
+// to the log raw, escape sequences and all (issue 15, D15).
+TEST(KeyLineReader, AnEndlessLineStaysBoundedAndIsIgnoredWhole) {
+  KeyLineReader reader;
+  const std::string chunk(4096, 'r');  // "rrrr...": would parse as a press if it were not cut
+  for (int i = 0; i < 2560; ++i) {  // 10 MiB
+    EXPECT_TRUE(reader.feed(chunk.data(), chunk.size()).empty());
+    ASSERT_LE(reader.pendingBytes(), KeyLineReader::kMaxLineBytes);
+  }
+  const std::vector<KeyLineReader::Line> lines = reader.feed("x\nr\n", 4);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_TRUE(lines[0].cut);
+  EXPECT_EQ(lines[0].text.size(), KeyLineReader::kMaxLineBytes);
+  EXPECT_FALSE(lines[1].cut);  // the next line is whole again
+  EXPECT_EQ(lines[1].text, "r");
+  EXPECT_EQ(KeyLineReader::printable(lines[0].text, lines[0].cut), std::string(40, 'r') + "...");
+}
+
+TEST(KeyLineReader, ControlAndEscapeBytesAreShownAsHexNotSentToTheTerminal) {
+  const std::string hostile = "\x1b[2J\x1b]0;owned\x07\r\\\xff ok";
+  const std::string shown = KeyLineReader::printable(hostile);
+  EXPECT_EQ(shown, "\\x1B[2J\\x1B]0;owned\\x07\\x0D\\x5C\\xFF ok");
+  for (char c : shown) EXPECT_TRUE(c >= 0x20 && c < 0x7F) << static_cast<int>(c);
 }
 
 // Writes `text` to the FIFO as a separate writer, as `echo r > fifo` does.

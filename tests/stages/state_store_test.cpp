@@ -11,6 +11,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "stages/state_store.hpp"
 
@@ -120,6 +121,61 @@ TEST_F(StateStore, LightingRoundTripsAndDamagedFilesAreClearErrors) {
     EXPECT_FALSE(loadLighting(dir_ / "state", error)) << bad;
     EXPECT_NE(error.find(path.string()), std::string::npos) << error;
   }
+}
+
+// Values a fit cannot produce, each in an otherwise good file (issue 15,
+// D16): the file is refused whole with the field named, where they used to
+// be loaded and shown (0 or 1,000 lights, rgb 1e308, a negative solid angle,
+// exposure 1e-300, a zero dominant direction, texel -1 as 4294967295).
+TEST_F(StateStore, ValuesNoFitCanProduceAreRefusedNamingTheField) {
+  StoredLighting lighting;
+  ibl::DomeLight light;
+  light.direction_w = glm::normalize(glm::dvec3(0.3, -0.2, 0.9));
+  light.rgb = {0.4, 0.5, 0.6};
+  light.spread_rad = 0.12;
+  light.solid_angle_sr = 0.8;
+  lighting.lights = {light, light};
+  lighting.dominant = {true, light.direction_w, light.rgb};
+  ibl::ClippedLight sun;
+  sun.direction_w = glm::dvec3(0.0, 0.0, 1.0);
+  sun.irradiance_rgb = {3.0, 2.9, 2.7};
+  sun.texels = {100, 101};
+  sun.texel_share = {0.5f, 0.5f};
+  lighting.clipped_lights = {sun};
+  lighting.clipped_share_at_fit = {0.75};
+  lighting.exposure_at_fit = 2500.0;
+  std::string error;
+  ASSERT_TRUE(saveLighting(dir_ / "state", lighting, error)) << error;
+  const fs::path path = lightingStatePath(dir_ / "state");
+  const nlohmann::json good = nlohmann::json::parse(read(path));
+  ASSERT_TRUE(loadLighting(dir_ / "state", error)) << error;
+
+  const nlohmann::json thousand_lights = nlohmann::json(std::vector<nlohmann::json>(1000, good["lights"][0]));
+  const std::vector<std::tuple<std::string, nlohmann::json, std::string>> cases = {
+      {"/lights", nlohmann::json::array(), "field 'lights': 0 entries"},
+      {"/lights", thousand_lights, "field 'lights': 1000 entries"},
+      {"/lights/1/rgb/2", 1e308, "field 'lights[1].rgb[2]'"},
+      {"/lights/0/solid_angle_sr", -0.5, "field 'lights[0].solid_angle_sr'"},
+      {"/lights/0/spread_rad", "wide", "field 'lights[0].spread_rad': not a number"},
+      {"/exposure_at_fit", 1e-300, "field 'exposure_at_fit'"},
+      {"/dominant_light/direction", {0, 0, 0}, "field 'dominant_light.direction': not a unit direction"},
+      {"/clipped_lights/0/texels/1", -1, "field 'clipped_lights[0].texels[1]'"},
+      {"/clipped_lights/0/texel_share/0", 7.0, "field 'clipped_lights[0].texel_share[0]'"},
+      {"/clipped_lights/0/texel_share", {0.5}, "field 'clipped_lights[0].texel_share': 1 entries"},
+  };
+  for (const auto& [pointer, value, says] : cases) {
+    nlohmann::json bad = good;
+    bad[nlohmann::json::json_pointer(pointer)] = value;
+    std::ofstream(path) << bad.dump();
+    EXPECT_FALSE(loadLighting(dir_ / "state", error)) << pointer;
+    EXPECT_NE(error.find(path.string() + ": " + says), std::string::npos) << pointer << ": " << error;
+    EXPECT_EQ(error.find('\n'), std::string::npos) << "one line";
+  }
+  // A fit that found no dominant light stores a zero direction: that loads.
+  nlohmann::json none = good;
+  none["dominant_light"] = {{"found", false}, {"direction", {0, 0, 0}}, {"rgb", {0, 0, 0}}};
+  std::ofstream(path) << none.dump();
+  EXPECT_TRUE(loadLighting(dir_ / "state", error)) << error;
 }
 
 }  // namespace

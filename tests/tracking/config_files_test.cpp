@@ -206,6 +206,40 @@ TEST(CameraFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
   expectConfigError(load(radial), radial, "distortion_coefficients", "k1");
 }
 
+// OpenCV reads the first of duplicate matrix keys, ignores unknown ones
+// and saturates dt: u (600 became 255, analysed with exit 0); each is now a
+// line naming the file and the matrix (issue 15, D8, D9).
+TEST(CameraFile, DuplicateOrUnknownMatrixKeysAndIntegerTypesAreRefused) {
+  TempFolder folder;
+  auto load = [](const std::string& path) { return [path] { config::loadCameraFile(path); }; };
+  const std::string good = cameraFileWith(kPlainMatrix, kDistortion1x5);
+  const std::string matrix_start = "camera_matrix: !!opencv-matrix\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {"   rows: 3\n", "key 'rows' appears twice"},
+      {"   data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n", "key 'data' appears twice"},
+      {"   step: 4\n", "unknown key 'step'"},
+  };
+  int index = 0;
+  for (const auto& [extra_line, says] : cases) {
+    std::string text = good;
+    // After the matrix's own data line, inside its block.
+    const std::size_t data_end = text.find("\n", text.find("   data:", text.find(matrix_start))) + 1;
+    text.insert(data_end, extra_line);
+    const std::string path = folder.write("dup" + std::to_string(index++) + ".yaml", text);
+    expectConfigError(load(path), path, "camera_matrix", says);
+  }
+  for (const char* type : {"u", "i", "s"}) {
+    std::string text = good;
+    text.replace(text.find("dt: d"), 5, std::string("dt: ") + type);
+    const std::string path = folder.write(std::string("dt_") + type + ".yaml", text);
+    expectConfigError(load(path), path, "camera_matrix", "would round or saturate");
+  }
+  // dt: f, as OpenCV's own tools write some matrices, still loads.
+  std::string as_float = good;
+  as_float.replace(as_float.find("dt: d"), 5, "dt: f");
+  EXPECT_NO_THROW(config::loadCameraFile(folder.write("dt_f.yaml", as_float)));
+}
+
 TEST(RigFile, LoadsWithDefaultReflectance) {
   TempFolder folder;
   RigGeometry rig = config::loadRigFile(folder.write("rig.yaml", kGoodRig));
