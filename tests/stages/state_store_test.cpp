@@ -66,7 +66,8 @@ TEST_F(StateStore, WriteFailureKeepsTheOldFileAndSaysWhy) {
   EXPECT_NE(error.find("cannot create"), std::string::npos) << error;
 }
 
-TEST_F(StateStore, LightingRoundTripsAndDamagedFilesAreClearErrors) {
+// A lighting state as a fit leaves it: two dome lights, a clipped sun.
+StoredLighting fittedLighting() {
   StoredLighting lighting;
   ibl::DomeLight light;
   light.direction_w = glm::normalize(glm::dvec3(0.3, -0.2, 0.9));
@@ -85,6 +86,13 @@ TEST_F(StateStore, LightingRoundTripsAndDamagedFilesAreClearErrors) {
   lighting.clipped_lights = {sun};
   lighting.clipped_share_at_fit = {0.75};
   lighting.exposure_at_fit = 2500.0;
+  return lighting;
+}
+
+TEST_F(StateStore, LightingRoundTripsAndDamagedFilesAreClearErrors) {
+  const StoredLighting lighting = fittedLighting();
+  const ibl::DomeLight& light = lighting.lights[0];
+  const ibl::ClippedLight& sun = lighting.clipped_lights[0];
   std::string error;
   ASSERT_TRUE(saveLighting(dir_ / "state", lighting, error)) << error;  // creates the directory
   const auto loaded = loadLighting(dir_ / "state", error);
@@ -128,22 +136,7 @@ TEST_F(StateStore, LightingRoundTripsAndDamagedFilesAreClearErrors) {
 // be loaded and shown (0 or 1,000 lights, rgb 1e308, a negative solid angle,
 // exposure 1e-300, a zero dominant direction, texel -1 as 4294967295).
 TEST_F(StateStore, ValuesNoFitCanProduceAreRefusedNamingTheField) {
-  StoredLighting lighting;
-  ibl::DomeLight light;
-  light.direction_w = glm::normalize(glm::dvec3(0.3, -0.2, 0.9));
-  light.rgb = {0.4, 0.5, 0.6};
-  light.spread_rad = 0.12;
-  light.solid_angle_sr = 0.8;
-  lighting.lights = {light, light};
-  lighting.dominant = {true, light.direction_w, light.rgb};
-  ibl::ClippedLight sun;
-  sun.direction_w = glm::dvec3(0.0, 0.0, 1.0);
-  sun.irradiance_rgb = {3.0, 2.9, 2.7};
-  sun.texels = {100, 101};
-  sun.texel_share = {0.5f, 0.5f};
-  lighting.clipped_lights = {sun};
-  lighting.clipped_share_at_fit = {0.75};
-  lighting.exposure_at_fit = 2500.0;
+  const StoredLighting lighting = fittedLighting();
   std::string error;
   ASSERT_TRUE(saveLighting(dir_ / "state", lighting, error)) << error;
   const fs::path path = lightingStatePath(dir_ / "state");
