@@ -1,5 +1,7 @@
 #include "config/camera_file.hpp"
 
+#include <optional>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -53,6 +55,32 @@ void validateCameraIntrinsics(const CameraIntrinsics& camera, const std::string&
     fail("camera_matrix", "principal point (" + formatNumber(camera.cx_px) + ", " + formatNumber(camera.cy_px) +
                               ") is outside the " + std::to_string(camera.width_px) + "x" +
                               std::to_string(camera.height_px) + " image");
+  if (const std::optional<double> fold = radialFoldInsideImage(camera))
+    fail("distortion_coefficients",
+         "k1, k2, k3 fold the image: the distorted radius stops growing at " + formatNumber(*fold) +
+             " (normalised), inside the frame, so two directions land on one pixel and undistorting is ambiguous");
+}
+
+std::optional<double> radialFoldInsideImage(const CameraIntrinsics& camera) {
+  const double k1 = camera.distortion[0], k2 = camera.distortion[1], k3 = camera.distortion[4];
+  // The frame's farthest corner, as a distorted normalised radius.
+  double corner_radius = 0.0;
+  for (double x : {-0.5 - camera.cx_px, camera.width_px - 0.5 - camera.cx_px})
+    for (double y : {-0.5 - camera.cy_px, camera.height_px - 0.5 - camera.cy_px})
+      corner_radius = std::max(corner_radius, std::hypot(x / camera.fx_px, y / camera.fy_px));
+  // rd(r) = r (1 + k1 r^2 + k2 r^4 + k3 r^6) must rise until it reaches the
+  // corner's radius. Walked in steps of 1/4096 of that radius: a fold
+  // narrower than a step is narrower than a pixel everywhere probelight
+  // looks (the frame is at most 8192 px on a side).
+  const double step = corner_radius / 4096.0;
+  for (double r = 0.0; r <= 64.0 * corner_radius; r += step) {
+    const double r2 = r * r;
+    const double rd = r * (1.0 + r2 * (k1 + r2 * (k2 + r2 * k3)));
+    if (rd >= corner_radius) return std::nullopt;
+    const double slope = 1.0 + r2 * (3.0 * k1 + r2 * (5.0 * k2 + r2 * 7.0 * k3));
+    if (slope <= 0.0) return r;
+  }
+  return std::nullopt;  // grows too slowly to reach the corner within 64x: no fold, only a very flat lens
 }
 
 CameraIntrinsics loadCameraFile(const std::string& path) {

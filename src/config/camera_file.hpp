@@ -2,6 +2,7 @@
 // tools write (image_width, image_height, camera_matrix, distortion_coefficients).
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "config/config_reader.hpp"
@@ -25,6 +26,13 @@ void saveCameraFile(const std::string& path, const CameraIntrinsics& camera);
 constexpr double kMinFocalPerSide = 0.1;   // x the image's larger side
 constexpr double kMaxFocalPerSide = 50.0;
 constexpr double kMaxDistortion[5] = {100.0, 100.0, 1.0, 1.0, 1000.0};  // |k1| |k2| |p1| |p2| |k3|
+
+// Where the radial distortion's map from undistorted to distorted radius
+// stops rising before it reaches the frame's farthest corner (normalised
+// radius, undistorted), or nullopt when it rises all the way: past a fold
+// two directions land on one pixel. Tangential terms are left out (|p| <= 1
+// and, from real calibrations, below 0.01: they tilt the map, not fold it).
+std::optional<double> radialFoldInsideImage(const CameraIntrinsics& camera);
 
 // The checks loadCameraFile applies, for intrinsics that come from elsewhere
 // (the simulator, a calibration run). Throws ConfigError naming `path`.

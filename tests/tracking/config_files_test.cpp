@@ -240,6 +240,33 @@ TEST(CameraFile, DuplicateOrUnknownMatrixKeysAndIntegerTypesAreRefused) {
   EXPECT_NO_THROW(config::loadCameraFile(folder.write("dt_f.yaml", as_float)));
 }
 
+// k1 = -1.5 with a 600 px focal length: rd = r - 1.5 r^3 peaks at r = 0.47
+// (rd 0.31), short of the frame's corner at rd 0.67, so the outer frame
+// would be two directions at once. OpenCV's calibration sample's real
+// lens (k1 -0.27, k3 0.24) rises all the way and loads (test above).
+TEST(CameraFile, DistortionThatFoldsTheFrameIsRefused) {
+  TempFolder folder;
+  const std::string folding = folder.write(
+      "fold.yaml", cameraFileWith(kPlainMatrix, "distortion_coefficients: [-1.5, 0.0, 0.0, 0.0, 0.0]\n"));
+  expectConfigError([&] { config::loadCameraFile(folding); }, folding, "distortion_coefficients", "fold the image");
+  CameraIntrinsics camera;
+  camera.fx_px = camera.fy_px = 600.0;
+  camera.cx_px = 319.5;
+  camera.cy_px = 239.5;
+  camera.distortion = {-1.5, 0.0, 0.0, 0.0, 0.0};
+  const std::optional<double> fold = config::radialFoldInsideImage(camera);
+  ASSERT_TRUE(fold);
+  EXPECT_NEAR(*fold, std::sqrt(1.0 / 4.5), 0.668 / 4096.0 + 1e-9);  // rd' = 1 - 4.5 r^2 = 0
+  // A weaker barrel peaks at r 1.05 with rd 0.70: past the corner's 0.67.
+  camera.distortion = {-0.3, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_FALSE(config::radialFoldInsideImage(camera));
+  // A fold past the corner does not matter: the frame never shows it.
+  camera.distortion = {-0.6, 0.0, 0.0, 0.0, 0.0};  // peak at r 0.745, rd 0.50 < 0.67: folds inside
+  EXPECT_TRUE(config::radialFoldInsideImage(camera));
+  camera.fx_px = camera.fy_px = 1200.0;  // the corner at rd 0.33: reached before the peak
+  EXPECT_FALSE(config::radialFoldInsideImage(camera));
+}
+
 TEST(RigFile, LoadsWithDefaultReflectance) {
   TempFolder folder;
   RigGeometry rig = config::loadRigFile(folder.write("rig.yaml", kGoodRig));
