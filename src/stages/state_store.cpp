@@ -117,7 +117,15 @@ std::optional<StoredLighting> loadLighting(const std::filesystem::path& state_di
     return std::nullopt;
   }
   try {
-    const nlohmann::json json = nlohmann::json::parse(in);
+    // The file nests 3 deep; nlohmann builds (and frees) nested values
+    // recursively, so 10^6 brackets overflowed the stack (SIGSEGV). The
+    // callback sees each value's depth as it is read, before it is built.
+    constexpr int kMaxDepth = 16;
+    const nlohmann::json json =
+        nlohmann::json::parse(in, [](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+          if (depth > kMaxDepth) throw std::runtime_error("nested deeper than " + std::to_string(kMaxDepth) + " levels");
+          return true;
+        });
     if (json.value("format", "") != "probelight lighting 1") {
       error = path.string() + ": not a probelight lighting file (format)";
       return std::nullopt;

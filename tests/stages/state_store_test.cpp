@@ -171,5 +171,17 @@ TEST_F(StateStore, ValuesNoFitCanProduceAreRefusedNamingTheField) {
   EXPECT_TRUE(loadLighting(dir_ / "state", error)) << error;
 }
 
+// A million nested brackets used to overflow the stack in nlohmann's
+// parser (SIGSEGV): now a one-line refusal like any damaged file.
+TEST_F(StateStore, DeeplyNestedJsonIsRefusedNotACrash) {
+  std::string error;
+  ASSERT_TRUE(saveLighting(dir_ / "state", fittedLighting(), error)) << error;
+  const fs::path path = lightingStatePath(dir_ / "state");
+  std::ofstream(path) << "{\"format\": \"probelight lighting 1\", \"lights\": " << std::string(1000000, '[')
+                      << std::string(1000000, ']') << "}";
+  EXPECT_FALSE(loadLighting(dir_ / "state", error));
+  EXPECT_NE(error.find(path.string() + ": nested deeper than 16 levels"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace probelight
