@@ -230,9 +230,9 @@ std::string checkImageBytes(const std::vector<std::uint8_t>& bytes) {
   return "";
 }
 
-// The whole file, or "" with `why`. Opened without blocking and checked
-// again on the open descriptor, so a FIFO swapped in after the first check
-// cannot hang the read either.
+// Reads the whole of `path` into `bytes`; false with `why` when it cannot.
+// Opened without blocking and checked again on the open descriptor, so a
+// FIFO swapped in after the first check cannot hang the read either.
 bool readWholeFile(const std::string& path, std::vector<std::uint8_t>& bytes, std::string& why) {
   struct stat info {};
   if (::stat(path.c_str(), &info) != 0) {

