@@ -308,7 +308,7 @@ std::vector<Switch> lightSwitches(AnalyzeOptions& options) {
 
 // Each bracket frame is decoded and kept while merging: 40 of them is a
 // mistake (a glob gone wide), not a bracket; the kiosk's own has 5.
-void checkBracketCount(const AnalyzeOptions& options) {
+static void checkBracketCount(const AnalyzeOptions& options) {
   if (options.brackets.size() > kMaxBracketFrames)
     throw UsageError("flag --bracket: at most " + std::to_string(kMaxBracketFrames) + " bracket frames, got " +
                      std::to_string(options.brackets.size()));
