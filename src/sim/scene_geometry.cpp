@@ -83,39 +83,6 @@ ProbeOutline probeOutline(const CameraIntrinsics& camera, const PoseCamFromWorld
   return outline;
 }
 
-std::optional<double> intersectSphere(const glm::dvec3& origin, const glm::dvec3& dir, const glm::dvec3& center,
-                                      double radius) {
-  glm::dvec3 oc = origin - center;
-  double b = glm::dot(oc, dir);
-  double c = glm::dot(oc, oc) - radius * radius;
-  double discriminant = b * b - c;
-  if (discriminant < 0.0) return std::nullopt;
-  double root = std::sqrt(discriminant);
-  double t = -b - root;
-  if (t <= 1e-9) t = -b + root;
-  if (t <= 1e-9) return std::nullopt;
-  return t;
-}
-
-std::optional<double> intersectPost(const glm::dvec3& origin, const glm::dvec3& dir, const glm::dvec2& axis_xy,
-                                    double radius_m, double top_z) {
-  glm::dvec2 o{origin.x - axis_xy.x, origin.y - axis_xy.y};
-  glm::dvec2 d{dir.x, dir.y};
-  double a = glm::dot(d, d);
-  if (a < 1e-18) return std::nullopt;
-  double b = glm::dot(o, d);
-  double c = glm::dot(o, o) - radius_m * radius_m;
-  double discriminant = b * b - a * c;
-  if (discriminant < 0.0) return std::nullopt;
-  double root = std::sqrt(discriminant);
-  for (double t : {(-b - root) / a, (-b + root) / a}) {
-    if (t <= 1e-9) continue;
-    double z = origin.z + t * dir.z;
-    if (z >= 0.0 && z <= top_z) return t;
-  }
-  return std::nullopt;
-}
-
 bool tagFullyVisible(const CameraIntrinsics& camera, const RigGeometry& rig, double post_radius_m,
                      const PoseCamFromWorld& pose, double margin_px) {
   auto corners = tagCornersWorld(rig.tag_size_m);

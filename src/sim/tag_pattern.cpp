@@ -52,6 +52,7 @@ TagPattern::TagPattern(const std::string& family, int id, double tag_size_m) {
   cell_m_ = tag_size_m / border_cells_;
   origin_x_m_ = -total_cells_ * cell_m_ / 2.0;
   origin_y_m_ = total_cells_ * cell_m_ / 2.0;
+  reject_beyond_m_ = total_cells_ * cell_m_ * (1.0 + 1e-9);
 }
 
 }  // namespace probelight::sim

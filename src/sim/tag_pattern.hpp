@@ -19,6 +19,12 @@ class TagPattern {
   // tag_size_m spans the width_at_border cells centred on the origin.
   // Returns true and sets is_white when (x_w, y_w) lies on the printed image.
   bool sample(double x_w, double y_w, bool& is_white) const {
+    // Most floor points are off the tag: turned away before the divisions
+    // (a latency a floor ray waits on), by a test that rejects only points
+    // the exact one below rejects too (the margin covers its rounding), and
+    // NaN, which would index the bitmap at int(NaN).
+    const double right_m = x_w - origin_x_m_, down_m = origin_y_m_ - y_w;
+    if (!(right_m >= 0.0 && down_m >= 0.0 && right_m <= reject_beyond_m_ && down_m <= reject_beyond_m_)) return false;
     double col = (x_w - origin_x_m_) / cell_m_;
     double row = (origin_y_m_ - y_w) / cell_m_;
     if (col < 0.0 || row < 0.0 || col >= total_cells_ || row >= total_cells_) return false;
@@ -37,6 +43,7 @@ class TagPattern {
   double cell_m_ = 0.0;
   double origin_x_m_ = 0.0;  // W x of the bitmap's left edge
   double origin_y_m_ = 0.0;  // W y of the bitmap's top edge
+  double reject_beyond_m_ = 0.0;  // a little past the printed edge, total_cells_ * cell_m_ * (1 + 1e-9)
 };
 
 // Families the simulator can print.

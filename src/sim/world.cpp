@@ -571,6 +571,9 @@ struct FrameState {
   PoseCamFromWorld pose;
   glm::dmat3 world_from_cam;
   glm::dvec3 eye;
+  // The ball and its post as every camera ray from `eye` meets them.
+  SphereFromOrigin ball_from_eye{glm::dvec3(0.0), glm::dvec3(0.0), 0.0};
+  PostFromOrigin post_from_eye{glm::dvec3(0.0), glm::dvec2(0.0), 0.0, 0.0};
   LightingState lighting;
   glm::dvec3 ground_radiance_per_albedo;              // E_up / pi
   std::array<glm::dvec3, kPostAzimuthSteps> post_radiance;  // by world azimuth of the post's normal
@@ -664,6 +667,10 @@ struct World::Impl {
     fs.pose = path->pose(frame);
     fs.world_from_cam = glm::transpose(fs.pose.R_cam_from_world);
     fs.eye = fs.pose.cameraCenterWorld();
+    const RigGeometry& rig = scene.rig;
+    fs.ball_from_eye = SphereFromOrigin(fs.eye, rig.probe_center_w, rig.probe_radius_m);
+    fs.post_from_eye = PostFromOrigin(fs.eye, {rig.probe_center_w.x, rig.probe_center_w.y}, scene.post_radius_m,
+                                      rig.probe_center_w.z - rig.probe_radius_m);
     fs.lighting = lightingAt(frame);
     glm::dvec3 e_up = irradianceUp(fs.lighting);
     fs.ground_radiance_per_albedo = e_up / kPi;
@@ -693,16 +700,13 @@ struct World::Impl {
   // The first object a camera ray hits, and the distance to it (+inf for the
   // environment); for an occluder, its index in fs.occluders.
   double firstHit(const glm::dvec3& dir, const FrameState& fs, SceneObject& object, int* occluder_index = nullptr) const {
-    const RigGeometry& rig = scene.rig;
     double t_best = std::numeric_limits<double>::infinity();
     object = SceneObject::kEnvironment;
-    if (auto t = intersectSphere(fs.eye, dir, rig.probe_center_w, rig.probe_radius_m)) {
+    if (auto t = fs.ball_from_eye.intersect(dir)) {
       t_best = *t;
       object = SceneObject::kProbe;
     }
-    if (auto t = intersectPost(fs.eye, dir, {rig.probe_center_w.x, rig.probe_center_w.y}, scene.post_radius_m,
-                               rig.probe_center_w.z - rig.probe_radius_m);
-        t && *t < t_best) {
+    if (auto t = fs.post_from_eye.intersect(dir); t && *t < t_best) {
       t_best = *t;
       object = SceneObject::kPost;
     }

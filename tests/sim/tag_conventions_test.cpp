@@ -11,6 +11,7 @@ extern "C" {
 }
 
 #include "sim/scene_geometry.hpp"
+#include "sim/tag_pattern.hpp"
 #include "sim/world.hpp"
 
 namespace probelight::sim {
@@ -96,6 +97,37 @@ TEST(TagConventions, WorldAxesPointAtPrintedImageRightAndTopEdges) {
   auto p = projectWorldPoints(world.scene().camera, truth.pose, {{0, 0, 0}, {0.05, 0, 0}, {0, 0.05, 0}});
   EXPECT_GT(p[1].x - p[0].x, 20.0);
   EXPECT_LT(p[2].y - p[0].y, -10.0);
+}
+
+// The printed image covers exactly [-h, h)^2 (h = printedHalfSizeM()): the
+// quick rejection in front of the cell lookup must not move its edges. Points
+// a nanometre inside each edge are on the tag, a nanometre outside are off,
+// and so are points far away and NaN.
+TEST(TagConventions, ThePrintedImageEndsExactlyAtItsEdges) {
+  const TagPattern tag("tag36h11", 0, 0.08);
+  const double h = tag.printedHalfSizeM();
+  EXPECT_NEAR(h, 0.08 * tag.totalCells() / tag.borderCells() / 2.0, 1e-15);
+  constexpr double kNanometre = 1e-9;
+  bool white = false;
+  for (const double along : {-h + kNanometre, 0.0, h - kNanometre}) {
+    EXPECT_TRUE(tag.sample(-h + kNanometre, along, white)) << along;
+    EXPECT_TRUE(tag.sample(h - kNanometre, along, white)) << along;
+    EXPECT_TRUE(tag.sample(along, -h + kNanometre, white)) << along;
+    EXPECT_TRUE(tag.sample(along, h - kNanometre, white)) << along;
+    EXPECT_FALSE(tag.sample(-h - kNanometre, along, white)) << along;
+    EXPECT_FALSE(tag.sample(h + kNanometre, along, white)) << along;
+    EXPECT_FALSE(tag.sample(along, -h - kNanometre, white)) << along;
+    EXPECT_FALSE(tag.sample(along, h + kNanometre, white)) << along;
+  }
+  // The outer ring is white (libapriltag's images have a white quiet zone)
+  // and the border inside it black.
+  const double cell = 2.0 * h / tag.totalCells();
+  ASSERT_TRUE(tag.sample(-h + 0.5 * cell, 0.0, white));
+  EXPECT_TRUE(white);
+  ASSERT_TRUE(tag.sample(-h + 1.5 * cell, 0.0, white));
+  EXPECT_FALSE(white);
+  EXPECT_FALSE(tag.sample(1e6, -1e6, white));
+  EXPECT_FALSE(tag.sample(std::nan(""), 0.0, white));
 }
 
 }  // namespace
