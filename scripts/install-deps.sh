@@ -6,8 +6,8 @@ set -euo pipefail
 packages=(
   # toolchain
   build-essential cmake pkg-config
-  # vision: marker detection, calibration, image files (libpng: the fast PNG writer for frames)
-  libapriltag-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev libpng-dev
+  # vision: marker detection, calibration, image files (libdeflate: the fast PNG writer for frames)
+  libapriltag-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev libdeflate-dev
   # maths and data
   libglm-dev nlohmann-json3-dev
   # the command line's parser (header-only)

@@ -7,13 +7,12 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
-#include <csetjmp>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <new>
 
-#include <png.h>
-#include <zlib.h>
+#include <libdeflate.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -49,41 +48,69 @@ bool writeRgbImage(const std::string& path, const ImageRGB8& rgb, const std::vec
 
 namespace {
 
-// libpng reports errors by longjmp: nothing with a destructor may live in
-// the frame that calls setjmp, so the encoding is plain C over a FILE.
-// libpng's message lands here.
-struct PngErrorSink {
-  char message[160] = {0};
-};
-
-void pngError(png_structp png, png_const_charp message) {
-  auto* sink = static_cast<PngErrorSink*>(png_get_error_ptr(png));
-  std::snprintf(sink->message, sizeof sink->message, "%s", message);
-  png_longjmp(png, 1);
+void appendBigEndian32(std::vector<std::uint8_t>& out, std::uint32_t value) {
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<std::uint8_t>(value >> shift));
 }
 
-void pngWarning(png_structp, png_const_charp) {}
+// A chunk's CRC-32 covers its type and data (PNG specification, 5.3).
+void appendChunkCrc(std::vector<std::uint8_t>& out, std::size_t type_at) {
+  appendBigEndian32(out, static_cast<std::uint32_t>(libdeflate_crc32(0, out.data() + type_at, out.size() - type_at)));
+}
 
-bool encodePng(std::FILE* file, const std::uint8_t* pixels, int width, int height, PngErrorSink& sink) {
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink, pngError, pngWarning);
-  if (!png) return false;
-  png_infop info = png_create_info_struct(png);
-  if (!info || setjmp(png_jmpbuf(png))) {
-    png_destroy_write_struct(&png, info ? &info : nullptr);
-    return false;
-  }
-  png_init_io(png, file);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 8, PNG_COLOR_TYPE_RGB,
-               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_BASE, PNG_FILTER_TYPE_BASE);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
-  png_set_compression_level(png, 1);
-  png_set_compression_strategy(png, Z_RLE);
-  png_write_info(png, info);
+struct CompressorDeleter {
+  void operator()(libdeflate_compressor* compressor) const { libdeflate_free_compressor(compressor); }
+};
+
+// The whole file in memory: 8-bit RGB, every row with the Up filter (the
+// one that helps most on camera frames), and the filtered rows deflated in
+// one call into a single IDAT chunk. Empty when the compressor cannot be
+// allocated.
+std::vector<std::uint8_t> encodePng(const std::uint8_t* pixels, int width, int height) {
+  // One compressor per writing thread, kept: allocating it costs more than
+  // a small frame's compression.
+  thread_local std::unique_ptr<libdeflate_compressor, CompressorDeleter> compressor(libdeflate_alloc_compressor(1));
+  if (!compressor) return {};
   const std::size_t stride = static_cast<std::size_t>(width) * 3;
-  for (int y = 0; y < height; ++y) png_write_row(png, const_cast<png_bytep>(pixels + stride * static_cast<std::size_t>(y)));
-  png_write_end(png, info);
-  png_destroy_write_struct(&png, &info);
-  return true;
+  std::vector<std::uint8_t> filtered((stride + 1) * static_cast<std::size_t>(height));
+  constexpr std::uint8_t kFilterUp = 2;
+  for (int y = 0; y < height; ++y) {
+    std::uint8_t* out = &filtered[(stride + 1) * static_cast<std::size_t>(y)];
+    const std::uint8_t* row = pixels + stride * static_cast<std::size_t>(y);
+    out[0] = kFilterUp;
+    if (y == 0) {
+      std::memcpy(out + 1, row, stride);  // the row above the first is zero
+    } else {
+      for (std::size_t i = 0; i < stride; ++i) out[1 + i] = static_cast<std::uint8_t>(row[i] - row[i - stride]);
+    }
+  }
+  const std::size_t bound = libdeflate_zlib_compress_bound(compressor.get(), filtered.size());
+  std::vector<std::uint8_t> file{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  file.reserve(8 + 25 + 12 + bound + 12);
+  appendBigEndian32(file, 13);
+  std::size_t type_at = file.size();
+  file.insert(file.end(), {'I', 'H', 'D', 'R'});
+  appendBigEndian32(file, static_cast<std::uint32_t>(width));
+  appendBigEndian32(file, static_cast<std::uint32_t>(height));
+  // Bit depth 8, colour type 2 (RGB), compression 0, filter method 0, no interlace.
+  file.insert(file.end(), {8, 2, 0, 0, 0});
+  appendChunkCrc(file, type_at);
+  const std::size_t length_at = file.size();
+  appendBigEndian32(file, 0);  // IDAT length, known once compressed
+  type_at = file.size();
+  file.insert(file.end(), {'I', 'D', 'A', 'T'});
+  const std::size_t data_at = file.size();
+  file.resize(data_at + bound);
+  const std::size_t compressed =
+      libdeflate_zlib_compress(compressor.get(), filtered.data(), filtered.size(), file.data() + data_at, bound);
+  if (compressed == 0) return {};
+  file.resize(data_at + compressed);
+  for (int k = 0; k < 4; ++k) file[length_at + k] = static_cast<std::uint8_t>(compressed >> (24 - 8 * k));
+  appendChunkCrc(file, type_at);
+  appendBigEndian32(file, 0);
+  type_at = file.size();
+  file.insert(file.end(), {'I', 'E', 'N', 'D'});
+  appendChunkCrc(file, type_at);
+  return file;
 }
 
 }  // namespace
@@ -98,15 +125,18 @@ bool writeRgbPng(const std::string& path, const ImageRGB8& rgb, std::string& err
     error = path + ": " + std::strerror(errno);
     return false;
   }
-  PngErrorSink sink;
-  const bool encoded = encodePng(file, rgb.pixels.data(), rgb.width, rgb.height, sink);
+  const std::vector<std::uint8_t> bytes = encodePng(rgb.pixels.data(), rgb.width, rgb.height);
+  const bool written = !bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), file) == bytes.size();
+  const int write_errno = errno;
   // A full disk often shows only at the flush.
-  const bool flushed = std::fflush(file) == 0 && !std::ferror(file);
+  const bool flushed = written && std::fflush(file) == 0 && !std::ferror(file);
   const int flush_errno = errno;
   const bool closed = std::fclose(file) == 0;
-  if (encoded && flushed && closed) return true;
-  error = path + ": " + (!encoded ? (sink.message[0] ? sink.message : "PNG encoding failed")
-                                  : std::strerror(flushed ? errno : flush_errno));
+  if (written && flushed && closed) return true;
+  error = path + ": " + (bytes.empty() ? std::string("PNG encoding failed (libdeflate)")
+                         : !written    ? std::strerror(write_errno)
+                         : !flushed    ? std::strerror(flush_errno)
+                                       : std::strerror(errno));
   return false;
 }
 

@@ -1,6 +1,7 @@
 #include "sim/world.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -121,16 +122,22 @@ class SrgbEncoder {
 
 template <typename Fn>
 void parallelRows(int rows, int threads, Fn fn) {
-  // Interleaved blocks balance rows with and without the ball.
+  // Blocks of rows go to whichever thread is free next, not in a fixed
+  // order: rows with the ball cost more, and a thread the scheduler stalls
+  // (the kiosk's own pipeline shares the cores) leaves its blocks to the
+  // others instead of holding up the frame. Which thread renders a row
+  // changes nothing in it.
   constexpr int kBlock = 8;
   if (threads <= 1) {
     fn(0, rows, 1);
     return;
   }
+  std::atomic<int> next_start{0};
   std::vector<std::thread> workers;
   for (int t = 0; t < threads; ++t) {
-    workers.emplace_back([=] {
-      for (int start = t * kBlock; start < rows; start += threads * kBlock) fn(start, std::min(rows, start + kBlock), 1);
+    workers.emplace_back([&] {
+      for (int start = next_start.fetch_add(kBlock); start < rows; start = next_start.fetch_add(kBlock))
+        fn(start, std::min(rows, start + kBlock), 1);
     });
   }
   for (std::thread& w : workers) w.join();
