@@ -13,7 +13,7 @@
 #include "cube_storage.glsl"
 
 #ifndef NORMAL_ITERATIONS
-#define NORMAL_ITERATIONS 2
+#define NORMAL_ITERATIONS 1
 #endif
 
 // Compared squared: a bisector shorter than the length is the blind spot.
@@ -48,18 +48,27 @@ uniform float u_storage_scale;     // linear_scale of cube_storage.glsl
 void main() {
   vec3 r = normalize(u_face_center + (2.0 * v_face_st.x - 1.0) * u_face_s_axis +
                      (2.0 * v_face_st.y - 1.0) * u_face_t_axis);
-  // Fixed-point iteration on the ball normal, as ibl::reflectedDirectionToPixel;
-  // in ball units the surface point is the normal itself. Each normalize
+  // Newton's steps on the ball normal, as ibl::reflectedDirectionToPixel; in
+  // ball units the surface point is the normal itself. The seed normalize
   // shares its squared length with the blind-spot test.
   vec3 bisector = u_eye_direction + r;
   float length_squared = dot(bisector, bisector);
   bool blind = length_squared < BLIND_SPOT_LENGTH_SQUARED;
   vec3 normal = bisector * inversesqrt(length_squared);
   for (int i = 0; i < NORMAL_ITERATIONS; ++i) {
-    bisector = normalize(u_eye_ball - normal) + r;
+    // (eye - n) + |eye - n| r points along normalize(eye - n) + r with one
+    // square root instead of a second normalize.
+    vec3 to_eye = u_eye_ball - normal;
+    float to_eye_squared = dot(to_eye, to_eye);
+    bisector = to_eye + sqrt(to_eye_squared) * r;
     length_squared = dot(bisector, bisector);
-    blind = blind || length_squared < BLIND_SPOT_LENGTH_SQUARED;
-    normal = bisector * inversesqrt(length_squared);
+    blind = blind || length_squared < BLIND_SPOT_LENGTH_SQUARED * to_eye_squared;
+    vec3 target = bisector * inversesqrt(length_squared);
+    // Newton's step length, 2|u|^2 / (2|u|^2 + eye.n - 1) written without
+    // doubling |u|^2, which a 16-bit mediump float holds only up to 65504.
+    float relaxation = to_eye_squared / (to_eye_squared + 0.5 * (dot(u_eye_ball, normal) - 1.0));
+    normal += relaxation * (target - normal);
+    normal *= 1.5 - 0.5 * dot(normal, normal);  // the chord back to unit length
   }
   // Visible exactly when the normal faces the eye (convex ball).
   blind = blind || dot(normal, u_eye_ball - normal) <= 0.0;

@@ -21,17 +21,35 @@ std::optional<glm::dvec2> reflectedDirectionToPixel(const MirrorBallView& view, 
       !isFinite(view.center_w) || !std::isfinite(view.radius_m))
     return std::nullopt;
   const glm::dvec3 r = glm::normalize(reflected_w);
-  // The seed treats the camera as infinitely far along O - C; each step then
-  // re-aims the view vector from the current surface point, which shrinks the
-  // error by about radius / distance.
-  glm::dvec3 bisector = glm::normalize(camera_center_w - view.center_w) + r;
+  // In ball units (centre 0, radius 1) the surface point is the normal
+  // itself and the camera sits at `eye`. The seed treats the camera as
+  // infinitely far along `eye`.
+  const glm::dvec3 eye = (camera_center_w - view.center_w) / view.radius_m;
+  glm::dvec3 bisector = glm::normalize(eye) + r;
   if (glm::length(bisector) < kBlindSpotLength) return std::nullopt;
   glm::dvec3 normal = glm::normalize(bisector);
   for (int i = 0; i < iterations; ++i) {
-    const glm::dvec3 surface_w = view.center_w + view.radius_m * normal;
-    bisector = glm::normalize(camera_center_w - surface_w) + r;
-    if (glm::length(bisector) < kBlindSpotLength) return std::nullopt;
-    normal = glm::normalize(bisector);
+    // The fixed-point step re-aims the view vector from the current surface
+    // point: target = normalize(normalize(eye - n) + r), written with one
+    // square root, as (eye - n) + |eye - n| r points the same way.
+    const glm::dvec3 to_eye = eye - normal;
+    const double to_eye_squared = glm::dot(to_eye, to_eye);
+    const double to_eye_length = std::sqrt(to_eye_squared);
+    bisector = to_eye + to_eye_length * r;
+    if (glm::length(bisector) < kBlindSpotLength * to_eye_length) return std::nullopt;
+    const glm::dvec3 target = glm::normalize(bisector);
+    // Newton's step on the same equation. n, r and the eye lie in one plane;
+    // with theta the normal's angle from the eye's direction, the step maps
+    // theta to (alpha - beta(theta)) / 2, beta the view vector's angle, whose
+    // derivative is beta' = (eye.n - 1) / |eye - n|^2. Newton divides the
+    // step by 1 + beta'/2: quadratic convergence where the plain step gains
+    // only a factor of radius / (2 distance).
+    const double relaxation = 2.0 * to_eye_squared / (2.0 * to_eye_squared + glm::dot(eye, normal) - 1.0);
+    normal += relaxation * (target - normal);
+    // The step runs along a chord, shorter than 1 by about step^2 / 8
+    // (~1e-4); one Newton step of 1/sqrt from 1 restores the unit length to
+    // the square of that, with no square root (the shader's costliest op).
+    normal *= 1.5 - 0.5 * glm::dot(normal, normal);
   }
   const glm::dvec3 surface_w = view.center_w + view.radius_m * normal;
   const glm::dvec3 to_camera = camera_center_w - surface_w;

@@ -25,15 +25,19 @@ struct MirrorBallView {
 
 // The pixel whose camera ray, reflected off the ball, travels along world
 // direction `reflected_w` (any length > 0). Empty when no such point is
-// visible (the blind spot directly behind the ball). `iterations` fixed-point
-// steps on the ball normal n = normalize(to_camera + reflected); the
-// contraction factor is about radius / distance, so 4 steps reach well below
+// visible (the blind spot directly behind the ball). `iterations` Newton
+// steps on the ball normal n = normalize(to_camera + reflected): each
+// squares the error (in units of the distance / radius ratio), so 1 step
+// leaves under 0.01 px at a ball 20 cm away and 3 steps reach well below
 // 1e-6 rad at kiosk distances. Exactly, with O the camera centre, C the ball
-// centre and r = normalize(reflected_w), all in W:
-//   n = normalize(normalize(O - C) + r)
-//   repeat `iterations` times: e = normalize(O - (C + radius n)); n = normalize(e + r)
+// centre, E = (O - C) / radius and r = normalize(reflected_w):
+//   n = normalize(normalize(E) + r)
+//   repeat `iterations` times:
+//     u = E - n; t = normalize(u + |u| r)          (the fixed-point target)
+//     n += (t - n) * 2|u|^2 / (2|u|^2 + E.n - 1)   (Newton's step length)
+//     n *= 1.5 - n.n / 2                           (back to unit length)
 //   P = C + radius n (from the final n); pixel = projectToPixel(P in camera)
-// Empty when any |e + r| < kBlindSpotLength, when the final P faces away from
+// Empty when any |u + |u| r| < kBlindSpotLength |u|, when the final P faces away from
 // the camera (dot(n, normalize(O - P)) <= 0) or when P is not in front of it,
 // and empty (never a NaN pixel) for a zero or non-finite direction, view or
 // resulting pixel.

@@ -15,10 +15,12 @@ namespace probelight::ibl {
 struct ProbeToCubeParams {
   int face_size = 64;
   double probe_reflectance = 1.0;
-  // Fixed-point steps, the same count the shader unrolls. 2 leave 0.02 px at
-  // a ball 20 cm away, 0.001 px at 40 cm (MirrorBall.PixelToDirectionToPixelRoundTrips),
-  // below what a mediump texture coordinate resolves (~0.3 px at 640 px).
-  int normal_iterations = 2;
+  // Newton steps on the ball normal (reflectedDirectionToPixel), the same
+  // count the shader unrolls. 1 leaves 0.008 px at a ball 20 cm away and
+  // 0.0004 px at 40 cm, 2 leave 4e-8 px (MirrorBall.PixelToDirectionToPixelRoundTrips):
+  // 1 is already below what a mediump texture coordinate resolves (~0.3 px
+  // at 640 px) and below the ball outline's own error (0.01 px).
+  int normal_iterations = 1;
   // At most samples_per_axis^2 directions spread over each texel (1: its
   // centre, as the GPU stage does); a texel takes as many a side as the
   // pixels it spans. Near the ball's rim one texel spans many pixels; a

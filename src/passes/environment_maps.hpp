@@ -86,7 +86,7 @@ struct EnvironmentMapSettings {
   int prefilter_face_size = 16;     // about the tap spacing; must divide reflection_face_size (factor <= 8)
   int intermediate_rows = 32;  // of the latitude-longitude maps after the east and north passes (even, 4..128)
   int diffuse_face_size = 16;
-  int normal_iterations = 2;  // unrolled in the shader; ibl::ProbeToCubeParams::normal_iterations
+  int normal_iterations = 1;  // unrolled in the shader; ibl::ProbeToCubeParams::normal_iterations
   ibl::CameraTransfer camera_transfer;  // how the camera's values decode to linear light (sRGB by default)
   int blur_half_taps = 16;    // 2 * half_taps + 1 taps a pass, pi / (2 half_taps + 1) apart; 0..32
 

@@ -70,10 +70,13 @@ TEST(MirrorBall, PixelToDirectionToPixelRoundTrips) {
     std::cout << "[ ball px ] " << name << ": worst round-trip error (px) after 0..8 iterations:";
     for (double e : worst_px_by_iterations) std::cout << ' ' << e;
     std::cout << '\n';
-    // Default 8 steps: the contraction (~radius/distance per step) leaves far
-    // below a micro-pixel; undistortion contributes ~1e-9 normalised.
+    // Newton's steps converge quadratically: two already leave far less than
+    // a micro-pixel at every kiosk distance (a plain fixed-point step gains
+    // only a factor of radius / (2 distance), and needed 6 steps for this at
+    // 20 cm); undistortion contributes ~1e-9 normalised.
+    EXPECT_LT(worst_px_by_iterations[2], 1e-6) << name;
     EXPECT_LT(worst_px_by_iterations[8], 1e-6) << name;
-    // The shader's 2 steps (ProbeToCubeParams::normal_iterations): under
+    // The shader's 1 step (ProbeToCubeParams::normal_iterations): under
     // 1/50 px even at 20 cm, invisible after bilinear 8-bit sampling (a
     // 1/50 px shift moves a sample by 2% of its neighbour's difference) and
     // below a mediump texture coordinate's step (~0.3 px across 640 px).
@@ -186,7 +189,8 @@ TEST(MirrorBall, OrthographicApproximationIsFarWorseThanOurs) {
               << " off the ball; ours (" << ProbeToCubeParams{}.normal_iterations << " iterations) worst " << glm::degrees(ours_worst_rad) << " deg\n";
     // A 64-px cube face spans 90 deg, ~1.4 deg a texel: the orthographic error
     // is several texels, ours a vanishing fraction of one (1/100 deg is
-    // 1/140 of a texel; 2 fixed-point steps leave 0.003 deg at 40 cm).
+    // 1/140 of a texel; 1 Newton step leaves 0.0027 deg at 40 cm, where
+    // the 2 plain fixed-point steps used before left 0.003 deg).
     EXPECT_GT(ortho_worst_rad, glm::radians(2.0)) << name;
     EXPECT_LT(ours_worst_rad, glm::radians(1e-2)) << name;
     EXPECT_LT(ours_worst_rad * 1000.0, ortho_worst_rad) << name;
