@@ -18,6 +18,8 @@ packages=(
   libcamera-dev libgbm-dev libdrm-dev libgpiod-dev libsystemd-dev
   # tests and benchmarks (systemd-analyze checks the unit file)
   libgtest-dev libbenchmark-dev systemd
+  # the sanitizer build and the libFuzzer targets (scripts/test-sanitizers.sh)
+  clang libclang-rt-14-dev
 )
 
 missing=()

@@ -162,12 +162,13 @@ std::string oneLine(std::string text) {
   return text;
 }
 
+
 // CLI11 gives the structure (--flag value, --flag=value, short names, -h and
 // --help with its text); the setters convert, with messages naming the flag.
 // Any usage error is one UsageError line, "<command>: ..." or "flag --X ...";
 // -h or --help throws HelpRequested with the command's help.
-void parseFlags(const std::vector<std::string>& args, const Command& command, const std::vector<ValuedFlag>& valued,
-                const std::vector<Switch>& switches) {
+void parseFlagsAsGiven(const std::vector<std::string>& args, const Command& command, const std::vector<ValuedFlag>& valued,
+                       const std::vector<Switch>& switches) {
   CLI::App app("probelight " + command.name + ": " + command.summary + "\n", "probelight " + command.name);
   app.option_defaults()->group("flags");
   app.set_help_flag("-h,--help", "print this help and exit");
@@ -234,7 +235,37 @@ void parseFlags(const std::vector<std::string>& args, const Command& command, co
     if (switch_options[i]->count() > 0) switches[i].set();
 }
 
+void parseFlags(const std::vector<std::string>& args, const Command& command, const std::vector<ValuedFlag>& valued,
+                const std::vector<Switch>& switches) {
+  try {
+    parseFlagsAsGiven(args, command, valued, switches);
+  } catch (const UsageError& error) {
+    throw UsageError(printable(error.what()));
+  }
+}
+
 }  // namespace
+
+std::string printable(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (byte < 0x20 || byte == 0x7f) {
+      static const char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[byte >> 4];
+      out += kHex[byte & 15];
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
 
 RunOptions parseRunOptions(const std::vector<std::string>& args) {
   RunOptions options;

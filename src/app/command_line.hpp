@@ -17,6 +17,10 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// `text` with its control characters written as C escapes (\n, \t, \x1b),
+// for a message that echoes an argument: it stays one printable line.
+std::string printable(const std::string& text);
+
 // Thrown by the parse functions for -h or --help: `text` is the command's
 // help (what it does, each flag on one line, its exit statuses). Not an
 // std::exception, so no catch-all reports it as an error.

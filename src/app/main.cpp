@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
     if (command == "analyze") return finishCommand(runAnalyze(parseAnalyzeOptions(args), std::cerr), command, std::cerr);
     if (command == "render") return finishCommand(runRender(parseRenderOptions(args), std::cerr), command, std::cerr);
     if (command == "calibrate-camera") return runCalibrateCamera(parseCalibrateCameraOptions(args), std::cout, std::cerr);
-    throw UsageError("unknown command '" + command + "' (see probelight --help)");
+    throw UsageError("unknown command '" + printable(command) + "' (see probelight --help)");
   } catch (const HelpRequested& help) {  // `probelight COMMAND --help` or -h
     std::cout << help.text;
     return 0;

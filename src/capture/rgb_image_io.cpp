@@ -80,7 +80,8 @@ std::vector<std::uint8_t> encodePng(const std::uint8_t* pixels, int width, int h
     if (y == 0) {
       std::memcpy(out + 1, row, stride);  // the row above the first is zero
     } else {
-      for (std::size_t i = 0; i < stride; ++i) out[1 + i] = static_cast<std::uint8_t>(row[i] - row[i - stride]);
+      const std::uint8_t* above = row - stride;
+      for (std::size_t i = 0; i < stride; ++i) out[1 + i] = static_cast<std::uint8_t>(row[i] - above[i]);
     }
   }
   const std::size_t bound = libdeflate_zlib_compress_bound(compressor.get(), filtered.size());

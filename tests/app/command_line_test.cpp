@@ -48,6 +48,27 @@ TEST(CommandLine, BadFlagsNameTheFlag) {
     EXPECT_EQ(message(args).find('\n'), std::string::npos) << "one line";
 }
 
+// Found by the command-line fuzzer (fuzz/): an argument holding a newline
+// or a terminal escape made a usage error of two lines, or one that rewrote
+// the terminal. Echoed arguments keep their bytes as C escapes (argv holds
+// no NUL, so none is tested).
+TEST(CommandLine, ArgumentsWithControlCharactersGiveOnePrintableLine) {
+  std::string bracket_error;
+  try {
+    parseAnalyzeOptions({"--frame", "f.png", "--camera", "c.yaml", "--rig", "r.yaml", "--out", "o", "--bracket",
+                         "\xc0\n\x01x@"});
+  } catch (const UsageError& error) {
+    bracket_error = error.what();
+  }
+  EXPECT_NE(bracket_error.find("--bracket"), std::string::npos) << bracket_error;
+  EXPECT_NE(bracket_error.find("\\n\\x01x@"), std::string::npos) << bracket_error;
+  for (const std::string& text : {message({"--frames", "1\n2"}), message({"--bogus\x1b[2J"}), bracket_error}) {
+    EXPECT_FALSE(text.empty());
+    for (const char c : text) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 || c == 0x7f) << text;
+  }
+  EXPECT_EQ(printable(std::string("a\tb\x7f\n", 5)), "a\\tb\\x7f\\n");
+}
+
 // -h and --help, for every command: HelpRequested with that command's own
 // flags, each on a line with its description.
 TEST(CommandLine, HelpForEveryCommandWithLongAndShortFlag) {

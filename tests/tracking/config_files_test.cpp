@@ -388,7 +388,8 @@ TEST(RigFile, SavingAnInvalidRigFailsBeforeWriting) {
 // constructor is caught.
 TEST(RigFile, TagFamiliesHaveTheirPublishedSizesAndNames) {
   const std::pair<const char*, int> published[] = {{"tag36h11", 587}, {"tag25h9", 35}, {"tag16h5", 30}};
-  for (const auto& [name, code_count] : published) {
+  for (const auto& [family, code_count] : published) {
+    const char* name = family;  // clang 14 cannot capture a structured binding
     auto known = std::find_if(config::knownTagFamilies().begin(), config::knownTagFamilies().end(),
                               [&](const config::TagFamilyInfo& info) { return info.name == name; });
     ASSERT_NE(known, config::knownTagFamilies().end()) << name;
