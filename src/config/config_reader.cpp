@@ -224,6 +224,10 @@ ConfigReader ConfigReader::fromText(const std::string& yaml_text, const std::str
     document->storage.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     throw ConfigError(display_name + ": " + describeParseError(e, header_lines_added));
+  } catch (const std::exception& e) {
+    // OpenCV's parser can also fail past its own checks: a damaged file made
+    // it throw std::length_error (found by fuzz/probelight_yaml_fuzzer.cpp).
+    throw ConfigError(display_name + ": not a YAML file OpenCV can read (its parser failed: " + e.what() + ")");
   }
   if (!document->storage.isOpened()) throw ConfigError(display_name + ": not a YAML file OpenCV can read");
   cv::FileNode root = document->storage.root();
@@ -393,6 +397,17 @@ cv::Mat ConfigReader::readMat(std::string_view name, int rows, int cols) {
     const std::string type = node["dt"].isString() ? node["dt"].string() : std::string();
     if (type != "d" && type != "f")
       fail(name, "dt '" + type + "' would round or saturate the values; calibration matrices are dt: d (or f)");
+    // cv::read allocates rows x cols before it looks at data: a matrix saying
+    // 65536 x 65536 asked for 32 GB (found by fuzz/camera_yaml_fuzzer.cpp).
+    // Its element count must be what data holds, which the file's size bounds.
+    const cv::FileNode rows_node = node["rows"], cols_node = node["cols"], data_node = node["data"];
+    if (!rows_node.isInt() || !cols_node.isInt() || !data_node.isSeq())
+      fail(name, "the !!opencv-matrix's rows and cols must be whole numbers and its data a list");
+    const long long declared_rows = static_cast<int>(rows_node), declared_cols = static_cast<int>(cols_node);
+    if (declared_rows < 1 || declared_cols < 1 ||
+        declared_rows * declared_cols != static_cast<long long>(data_node.size()))
+      fail(name, "the !!opencv-matrix says " + std::to_string(declared_rows) + "x" + std::to_string(declared_cols) +
+                     " but its data holds " + std::to_string(data_node.size()) + " numbers");
     try {
       cv::read(node, matrix, cv::Mat());
     } catch (const cv::Exception& e) {

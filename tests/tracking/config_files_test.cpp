@@ -234,6 +234,20 @@ TEST(CameraFile, DuplicateOrUnknownMatrixKeysAndIntegerTypesAreRefused) {
     const std::string path = folder.write(std::string("dt_") + type + ".yaml", text);
     expectConfigError(load(path), path, "camera_matrix", "would round or saturate");
   }
+  // cv::read allocates rows x cols before reading data: a matrix saying
+  // 65536 x 65536 asked for 32 GB (found by fuzz/camera_yaml_fuzzer.cpp).
+  // The size must be what data holds, and rows and cols whole numbers.
+  const std::pair<std::pair<std::string, std::string>, std::string> sizes[] = {
+      {{"rows: 3", "rows: 65536"}, "says 65536x3 but its data holds 9 numbers"},
+      {{"cols: 3", "cols: 0"}, "says 3x0 but its data holds 9 numbers"},
+      {{"cols: 3", "cols: three"}, "must be whole numbers"},
+  };
+  for (const auto& [edit, says] : sizes) {
+    std::string text = good;
+    text.replace(text.find(edit.first), edit.first.size(), edit.second);
+    const std::string path = folder.write("size" + std::to_string(index++) + ".yaml", text);
+    expectConfigError(load(path), path, "camera_matrix", says);
+  }
   // dt: f, as OpenCV's own tools write some matrices, still loads.
   std::string as_float = good;
   as_float.replace(as_float.find("dt: d"), 5, "dt: f");
