@@ -1,6 +1,7 @@
 // probelight's entry point: dispatches the command and maps failures to exit
 // statuses (2: bad flags or configuration, 1: runtime failure, 3: analyze
 // found no tag or no ball).
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -13,8 +14,14 @@
 #include "app/kiosk.hpp"
 #include "core/log_priority.hpp"
 
+#include <opencv2/core/utils/logger.hpp>
+
 int main(int argc, char** argv) {
   using namespace probelight;
+  // OpenCV's decoders log their own errors on stderr ("[ERROR:0@0.07] ...
+  // OpenJPEG2000: Malformed JP2"), a second line beside the one that names
+  // the file and says what failed. OPENCV_LOG_LEVEL still turns them on.
+  if (!std::getenv("OPENCV_LOG_LEVEL")) cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
     std::cout << usageText();

@@ -547,6 +547,22 @@ TEST_F(Analyze, AFrameWhoseHeaderClaimsFourBillionPixelsIsExit2NamingIt) {
   EXPECT_NE(replay.stderr_text.find("none of the 1 files"), std::string::npos) << replay.stderr_text;
 }
 
+// A frame OpenCV's own decoder complains about (a JPEG 2000 signature and
+// then garbage: OpenJPEG logs "Malformed JP2" through OpenCV's logger) still
+// gives one line on stderr, ours, naming the file.
+TEST_F(Analyze, AFrameOpenCvsDecoderComplainsAboutIsStillOneLine) {
+  config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
+  config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
+  const fs::path bad = dir_ / "bad.png";
+  std::ofstream(bad, std::ios::binary) << std::string("\x00\x00\x00\x0cjP  \r\n\x87\nXXXXXXXXXXXX", 24);
+  const CommandResult result = run("analyze --frame " + bad.string() + " --camera " + (dir_ / "camera.yaml").string() +
+                                   " --rig " + (dir_ / "rig.yaml").string() + " --out " + (dir_ / "out").string());
+  EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
+  expectOneLine(result);
+  EXPECT_NE(result.stderr_text.find(bad.string() + ": not an image OpenCV can decode"), std::string::npos)
+      << result.stderr_text;
+}
+
 // Frames a hostile or careless user gives (issue 15, D10, D11): a FIFO,
 // which would block the read forever, and a JPEG cut to 90 %, which OpenCV
 // decodes with grey rows and only a libjpeg warning. Each is exit 2 with one
