@@ -222,10 +222,12 @@ void pnmSize(const std::vector<std::uint8_t>& bytes, ImageSize& size) {
   std::uint64_t numbers[2] = {0, 0};
   std::size_t at = 2;
   for (std::uint64_t& number : numbers) {
-    // Everything up to the next digit is skipped, not only white space:
-    // OpenCV's reader does so, and a header "P6 3533<DLE>266777" made it
-    // allocate 2.8 GB where a stricter parse here read 3533x0 (found by
-    // fuzz/image_file_fuzzer.cpp).
+    // As OpenCV's reader: everything up to the next digit is skipped (a
+    // '#' comment to the end of its line), and the byte that ends a number
+    // is consumed whatever it is. Headers "P6 3533<DLE>266777" and
+    // "P6 3533#266777" made OpenCV allocate 2.8 GB where a stricter parse
+    // here read 3533x0 (found by fuzz/image_file_fuzzer.cpp). Where OpenCV
+    // would refuse a separator, reading on can only refuse more.
     while (at < bytes.size() && !std::isdigit(bytes[at])) {
       if (bytes[at] == '#')
         while (at < bytes.size() && bytes[at] != '\n') ++at;
@@ -237,6 +239,7 @@ void pnmSize(const std::vector<std::uint8_t>& bytes, ImageSize& size) {
       number = std::min<std::uint64_t>(number * 10 + (bytes[at] - '0'), 1ull << 40);
       ++at;
     }
+    ++at;  // the byte that ended the number
   }
   size = {numbers[0], numbers[1]};
 }

@@ -103,9 +103,15 @@ TEST_F(ReadImageFile, AHeaderClaimingASideAbove8192IsRefusedBeforeDecoding) {
   // OpenCV skips any byte that is not a digit between the numbers, so the
   // check does too (fuzz/image_file_fuzzer.cpp: this header made OpenCV
   // allocate 2.8 GB while the check read its height as 0).
-  const std::string odd_separator = "P6\n3533\x10" "266777\n255\n";
-  const fs::path separated = write("separated.ppm", std::vector<std::uint8_t>(odd_separator.begin(), odd_separator.end()));
-  EXPECT_NE(why(separated).find("says 3533x266777"), std::string::npos) << why(separated);
+  // And the byte that ends a number is consumed whatever it is, a '#' too.
+  for (const std::string odd_separator : {std::string("P6\n3533\x10" "266777\n255\n"), std::string("P6\n3533#266777(255\n")}) {
+    const fs::path separated = write("separated.ppm", std::vector<std::uint8_t>(odd_separator.begin(), odd_separator.end()));
+    EXPECT_NE(why(separated).find("says 3533x266777"), std::string::npos) << why(separated);
+  }
+  // A comment of its own still ends at its line.
+  const std::string commented = "P6\n# 99999 99999\n3 2\n255\n";
+  const fs::path small = write("commented.ppm", std::vector<std::uint8_t>(commented.begin(), commented.end()));
+  EXPECT_EQ(why(small).find("above the 8192 px limit"), std::string::npos) << why(small);
 
   // JPEG: the frame header's height and width (big-endian after the precision byte).
   std::vector<std::uint8_t> jpeg = encoded(".jpg");
