@@ -37,6 +37,8 @@ constexpr std::uint64_t kMaxImageFileBytes = 1ull << 30;
 // - does not exist, or is not a regular file (a FIFO would block the read
 //   forever, a folder or device is no image);
 // - is larger than kMaxImageFileBytes;
+// - is not a PNG, JPEG, BMP or PNM file (by its first bytes): OpenCV's other
+//   decoders are not checked here, and a damaged DICOM file aborts one;
 // - has a header (PNG, JPEG, BMP, PNM) claiming a side above
 //   kMaxImageSidePx: refused before anything is decoded, where OpenCV would
 //   decode a 20000x20000 PNG of 1 MB into 1.2 GB first;

@@ -547,9 +547,10 @@ TEST_F(Analyze, AFrameWhoseHeaderClaimsFourBillionPixelsIsExit2NamingIt) {
   EXPECT_NE(replay.stderr_text.find("none of the 1 files"), std::string::npos) << replay.stderr_text;
 }
 
-// A frame OpenCV's own decoder complains about (a JPEG 2000 signature and
-// then garbage: OpenJPEG logs "Malformed JP2" through OpenCV's logger) still
-// gives one line on stderr, ours, naming the file.
+// A frame in a format OpenCV's own decoder complains about (a JPEG 2000
+// signature and then garbage: OpenJPEG logged "Malformed JP2" through
+// OpenCV's logger, a second stderr line) gives one line, ours, naming the
+// file; readImageFile now refuses such a format before OpenCV sees it.
 TEST_F(Analyze, AFrameOpenCvsDecoderComplainsAboutIsStillOneLine) {
   config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
   config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
@@ -559,7 +560,7 @@ TEST_F(Analyze, AFrameOpenCvsDecoderComplainsAboutIsStillOneLine) {
                                    " --rig " + (dir_ / "rig.yaml").string() + " --out " + (dir_ / "out").string());
   EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
   expectOneLine(result);
-  EXPECT_NE(result.stderr_text.find(bad.string() + ": not an image OpenCV can decode"), std::string::npos)
+  EXPECT_NE(result.stderr_text.find(bad.string() + ": not a PNG, JPEG, BMP or PNM image"), std::string::npos)
       << result.stderr_text;
 }
 
@@ -821,7 +822,7 @@ TEST_F(AnalyzeBracket, MergedBracketMatchesTheHdrTruthAndBadFramesAreLeftOut) {
   EXPECT_NE(reasons["under3.png@-5"].find("its pixels say EV -3"), std::string::npos) << reasons["under3.png@-5"];
   EXPECT_NE(reasons["black.png@-15"].find("black"), std::string::npos);
   EXPECT_NE(reasons["white.png@-1"].find("clipped everywhere"), std::string::npos) << reasons["white.png@-1"];
-  EXPECT_NE(reasons["notes.png@-2"].find("not an image OpenCV can decode"), std::string::npos) << reasons["notes.png@-2"];
+  EXPECT_NE(reasons["notes.png@-2"].find("not a PNG, JPEG, BMP or PNM image"), std::string::npos) << reasons["notes.png@-2"];
   EXPECT_TRUE(reasons.find("moved.png@-3") == reasons.end()) << reasons["moved.png@-3"];
   EXPECT_NE(reasons["far.png@-3"].find("the camera moved too far"), std::string::npos) << analysis["hdr"]["frames"].dump(1);
   // One warning line per frame left out.

@@ -63,6 +63,21 @@ TEST_F(ReadImageFile, WholePngJpegBmpAndPpmFilesAreRead) {
   }
 }
 
+// Only the formats whose headers readImageFile checks reach OpenCV: a damaged
+// DICOM file (found by fuzz/image_file_fuzzer.cpp) made GDCM, under OpenCV,
+// abort the process on an assert; TIFF and WebP, which OpenCV also decodes,
+// are refused the same way, before any decoder sees them.
+TEST_F(ReadImageFile, FormatsOtherThanPngJpegBmpAndPnmAreRefusedBeforeDecoding) {
+  const std::vector<std::uint8_t> dicom = {'!', '!', 0x89, 0x16, 0, 0, 0, 0, 0, 0, 0xc1, 0xba, 'D', 'I', 'C', 'M'};
+  const std::vector<std::uint8_t> tiff = {'I', 'I', '*', 0, 8, 0, 0, 0, 0, 0};
+  const std::vector<std::uint8_t> webp = {'R', 'I', 'F', 'F', 4, 0, 0, 0, 'W', 'E', 'B', 'P'};
+  for (const auto& [name, bytes] : {std::pair{"dicom.png", dicom}, std::pair{"frame.tif", tiff}, std::pair{"frame.webp", webp}}) {
+    std::string reason;
+    EXPECT_TRUE(readImageFile(write(name, bytes).string(), cv::IMREAD_COLOR, &reason).empty()) << name;
+    EXPECT_NE(reason.find("not a PNG, JPEG, BMP or PNM image"), std::string::npos) << name << ": " << reason;
+  }
+}
+
 // OpenCV decodes both with the missing rows filled in; only libjpeg prints a
 // warning ("Premature end of JPEG file").
 TEST_F(ReadImageFile, APngOrJpegCutShortIsRefused) {
