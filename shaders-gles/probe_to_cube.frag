@@ -25,15 +25,12 @@
 #define BLIND_SPOT_LENGTH_SQUARED 1e-6
 #endif
 
-varying vec2 v_face_st;
+varying vec3 v_direction_cam;  // probe_to_cube.vert: the texel's direction, camera frame
 
-uniform vec3 u_face_center;  // direction at (s, t) = (0.5, 0.5)
-uniform vec3 u_face_s_axis;  // d(direction) / d(2s - 1)
-uniform vec3 u_face_t_axis;  // d(direction) / d(2t - 1)
-
-uniform vec3 u_eye_ball;                 // (camera centre - ball centre) / radius, in W
+// Everything below is in the camera's frame (rotation about the ball
+// centre changes none of the maths, and the CPU turns the face axes once).
+uniform vec3 u_eye_ball;                 // (camera centre - ball centre) / radius = -centre_cam / radius
 uniform vec3 u_eye_direction;            // normalize(u_eye_ball), computed once on the CPU
-uniform mat3 u_rotation_cam_from_world;  // R_cam_from_world
 uniform vec2 u_center_normalized;        // ball centre in the camera: (x/z, y/z)
 uniform float u_radius_over_depth;       // radius / ball centre's camera z
 uniform vec4 u_distortion;               // k1 k2 p1 p2
@@ -46,8 +43,7 @@ uniform float u_inverse_reflectance;
 uniform float u_storage_scale;     // linear_scale of cube_storage.glsl
 
 void main() {
-  vec3 r = normalize(u_face_center + (2.0 * v_face_st.x - 1.0) * u_face_s_axis +
-                     (2.0 * v_face_st.y - 1.0) * u_face_t_axis);
+  vec3 r = normalize(v_direction_cam);
   // Newton's steps on the ball normal, as ibl::reflectedDirectionToPixel; in
   // ball units the surface point is the normal itself. The seed normalize
   // shares its squared length with the blind-spot test.
@@ -73,7 +69,7 @@ void main() {
   // Visible exactly when the normal faces the eye (convex ball).
   blind = blind || dot(normal, u_eye_ball - normal) <= 0.0;
   // Camera point = centre_cam + radius * R n; divided by the centre's depth:
-  vec3 offset = u_radius_over_depth * (u_rotation_cam_from_world * normal);
+  vec3 offset = u_radius_over_depth * normal;
   float depth_ratio = 1.0 + offset.z;
   blind = blind || depth_ratio <= 0.0;
   vec2 normalized = (u_center_normalized + offset.xy) / max(depth_ratio, 1e-3);

@@ -164,7 +164,7 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
     transfer_define = "#define CAMERA_TRANSFER_LINEAR\n";
   }
   auto probe_program = gles::Program::fromEmbedded(
-      "cube_face.vert", "probe_to_cube.frag",
+      "probe_to_cube.vert", "probe_to_cube.frag",
       storage_defines + transfer_define + "#define NORMAL_ITERATIONS " + std::to_string(settings.normal_iterations) +
           "\n",
       error);
@@ -261,7 +261,9 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
     return false;
   }
   const CameraIntrinsics& camera = view.camera;
-  const glm::dvec3 eye_ball = (view.pose.cameraCenterWorld() - view.center_w) / view.radius_m;
+  // The shader works in the camera's frame: the eye relative to the ball
+  // centre, in radii, is -centre_cam / radius there.
+  const glm::dvec3 eye_ball = -center_cam / view.radius_m;
   const glm::dvec2 center_normalized{center_cam.x / center_cam.z, center_cam.y / center_cam.z};
   const glm::dvec2 center_px = ibl::projectToPixel(camera, center_cam);
   const glm::dvec2 center_distorted{(center_px.x - camera.cx_px) / camera.fx_px,
@@ -269,7 +271,6 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
   const glm::dvec2 size_px{camera.width_px, camera.height_px};
   const glm::dvec2 center_texcoord = (center_px + kPixelCenterToTexelCenter) / size_px;
   const glm::dvec2 focal_over_size = glm::dvec2(camera.fx_px, camera.fy_px) / size_px;
-  const glm::mat3 rotation(view.pose.R_cam_from_world);
   const float storage_scale = static_cast<float>(std::max(1.0, 1.0 / probe_reflectance));
 
   FramebufferStateGuard guard;
@@ -283,7 +284,6 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
   const glm::dvec3 eye_direction = glm::normalize(eye_ball);
   glUniform3f(probe_program_.uniform("u_eye_direction"), static_cast<float>(eye_direction.x),
               static_cast<float>(eye_direction.y), static_cast<float>(eye_direction.z));
-  glUniformMatrix3fv(probe_program_.uniform("u_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
   glUniform2f(probe_program_.uniform("u_center_normalized"), static_cast<float>(center_normalized.x),
               static_cast<float>(center_normalized.y));
   glUniform1f(probe_program_.uniform("u_radius_over_depth"), static_cast<float>(view.radius_m / center_cam.z));
@@ -307,7 +307,13 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
   for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face),
                            reflection_.texture.id(), 0);
-    setFaceUniforms(probe_program_, face);
+    const FaceBasis& basis = kFaceBases[static_cast<size_t>(face)];
+    const glm::dmat3& rotation = view.pose.R_cam_from_world;
+    const glm::vec3 center_cam_axis(rotation * glm::dvec3(basis.center)), s_axis_cam(rotation * glm::dvec3(basis.s_axis)),
+        t_axis_cam(rotation * glm::dvec3(basis.t_axis));
+    glUniform3fv(probe_program_.uniform("u_face_center_cam"), 1, glm::value_ptr(center_cam_axis));
+    glUniform3fv(probe_program_.uniform("u_face_s_axis_cam"), 1, glm::value_ptr(s_axis_cam));
+    glUniform3fv(probe_program_.uniform("u_face_t_axis_cam"), 1, glm::value_ptr(t_axis_cam));
     quad_.draw(position);
   }
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, 0);

@@ -1,5 +1,8 @@
 // EGL context, capability probe, shader error reporting and the render
 // target's screen convention, on the real Mesa driver.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -79,13 +82,59 @@ TEST_F(GpuTest, EveryEmbeddedShaderProgramCompilesForBothStorages) {
   ASSERT_TRUE(shaders.count("probe_to_cube.frag") && shaders.count("cosine_irradiance.frag"));
   for (const char* defines : {"", "#define CUBE_STORAGE_SRGB8 1\n"}) {
     std::string error;
-    EXPECT_TRUE(gles::Program::fromEmbedded("cube_face.vert", "probe_to_cube.frag", defines, error)) << error;
+    EXPECT_TRUE(gles::Program::fromEmbedded("probe_to_cube.vert", "probe_to_cube.frag", defines, error)) << error;
     for (const char* pass : {"#define PREFILTER_PASS 1\n", "#define EAST_PASS 1\n", "#define NORTH_PASS 1\n"}) {
       EXPECT_TRUE(gles::Program::fromEmbedded("cube_face.vert", "cosine_irradiance.frag", std::string(defines) + pass, error))
           << error;
     }
     EXPECT_TRUE(gles::Program::fromEmbedded("sphere_object.vert", "sphere_object.frag", defines, error)) << error;
   }
+}
+
+// color_transfer.glsl decodes sRGB's upper segment with a polynomial, not
+// pow(): against pow() on the same GPU it must stay within the fit's bound
+// (9.5e-5 relative, from the Chebyshev fit at double precision) plus the
+// rounding of a dozen float operations and of llvmpipe's own pow (both under
+// 1e-5), so 1.1e-4 in all; the lower, linear segment must be exact to
+// rounding. The shader writes 0.5 + 1000 x relative error into a byte: one
+// step is 3.9e-6, and a saturated byte (over 5e-4) fails the bound.
+TEST_F(GpuTest, TheSrgbDecodeMatchesTheCurveAcrossItsRange) {
+  constexpr int kSamples = 1024;
+  const std::string vertex = "attribute vec2 a_position;\nvoid main() { gl_Position = vec4(a_position, 0.0, 1.0); }\n";
+  const std::string fragment =
+      "#include \"color_transfer.glsl\"\n"
+      "uniform float u_samples;\n"
+      "void main() {\n"
+      "  float c = (gl_FragCoord.x - 0.5) / (u_samples - 1.0);\n"
+      "  float decoded = srgbToLinear(vec3(c)).g;\n"
+      "  float exact = c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);\n"
+      "  float relative = c > 0.0 ? decoded / exact - 1.0 : decoded;\n"
+      "  gl_FragColor = vec4(0.5 + 1000.0 * relative, 0.0, 0.0, 1.0);\n"
+      "}\n";
+  std::string error;
+  auto program = gles::Program::fromSources("srgb_test.vert", vertex, "srgb_test.frag", fragment, "", error);
+  ASSERT_TRUE(program.has_value()) << error;
+  gles::RenderTarget target;
+  ASSERT_TRUE(target.init(kSamples, 1, error)) << error;
+  gles::FullScreenQuad quad;
+  ASSERT_TRUE(quad.init(error)) << error;
+  target.bind();
+  program->use();
+  glUniform1f(program->uniform("u_samples"), static_cast<float>(kSamples));
+  quad.draw(program->attribute("a_position"));
+  ImageRGB8 image;
+  ASSERT_TRUE(target.readRGB(image, error)) << error;
+  double worst_upper = 0.0, worst_lower = 0.0;
+  for (int x = 0; x < kSamples; ++x) {
+    const double c = static_cast<double>(x) / (kSamples - 1);
+    const double relative = (image.row(0)[3 * x] / 255.0 - 0.5) / 1000.0;
+    double& worst = c <= 0.04045 ? worst_lower : worst_upper;
+    worst = std::max(worst, std::abs(relative));
+  }
+  std::printf("[ measure  ] sRGB decode against pow(): max relative error %.2e (upper segment), %.2e (lower)\n",
+              worst_upper, worst_lower);
+  EXPECT_LE(worst_upper, 1.1e-4);
+  EXPECT_LE(worst_lower, 1e-5);
 }
 
 TEST_F(GpuTest, RenderTargetReadsBackTopRowFirst) {
