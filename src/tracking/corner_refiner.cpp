@@ -63,23 +63,30 @@ class LinearImage {
 // few hundred calls a frame here).
 struct Lens {
   const CameraIntrinsics& camera;
-  std::vector<cv::Point2d> undistort(const std::vector<cv::Point2d>& distorted_px) const {
-    std::vector<cv::Point2d> out;
-    out.reserve(distorted_px.size());
+  // Into `out` (cleared), so that loops reuse its storage.
+  void undistort(const std::vector<cv::Point2d>& distorted_px, std::vector<cv::Point2d>& out) const {
+    out.clear();
     for (const cv::Point2d& p : distorted_px) {
       const glm::dvec3 ray = ibl::pixelToCameraRay(camera, {p.x, p.y});
       out.emplace_back(camera.fx_px * ray.x + camera.cx_px, camera.fy_px * ray.y + camera.cy_px);
     }
-    return out;
   }
-  std::vector<cv::Point2d> distort(const std::vector<cv::Point2d>& undistorted_px) const {
-    std::vector<cv::Point2d> out;
-    out.reserve(undistorted_px.size());
+  void distort(const std::vector<cv::Point2d>& undistorted_px, std::vector<cv::Point2d>& out) const {
+    out.clear();
     for (const cv::Point2d& p : undistorted_px) {
       const glm::dvec2 pixel = ibl::projectToPixel(
           camera, {(p.x - camera.cx_px) / camera.fx_px, (p.y - camera.cy_px) / camera.fy_px, 1.0});
       out.emplace_back(pixel.x, pixel.y);
     }
+  }
+  std::vector<cv::Point2d> undistort(const std::vector<cv::Point2d>& distorted_px) const {
+    std::vector<cv::Point2d> out;
+    undistort(distorted_px, out);
+    return out;
+  }
+  std::vector<cv::Point2d> distort(const std::vector<cv::Point2d>& undistorted_px) const {
+    std::vector<cv::Point2d> out;
+    distort(undistorted_px, out);
     return out;
   }
 };
@@ -111,14 +118,27 @@ std::optional<EdgeProfile> sampleProfile(const LinearImage& image, glm::dvec2 ce
   if (!image.inside(first) || !image.inside(centre + half_width_px * outward)) return std::nullopt;
   const int ends = std::max(1, n / 4);
   const int last = 2 * n;
-  double sum = 0.0, end_values = 0.0;
-  for (int i = 0; i <= last; ++i) {
-    const double value = image.sampleInside(first + static_cast<double>(i) * step);
+  // Three runs (the inner quarter, the middle, the outer quarter) instead of
+  // a test per sample: the same sums in the same order.
+  double sum = 0.0;
+  auto sample = [&](int i) { return image.sampleInside(first + static_cast<double>(i) * step); };
+  const double first_value = sample(0);
+  sum += first_value;
+  profile.inside += first_value;
+  int i = 1;
+  for (; i < ends; ++i) {
+    const double value = sample(i);
     sum += value;
-    if (i < ends) profile.inside += value;
-    if (i > last - ends) profile.outside += value;
-    if (i == 0 || i == last) end_values += value;
+    profile.inside += value;
   }
+  for (; i <= last - ends; ++i) sum += sample(i);
+  double value = 0.0;
+  for (; i <= last; ++i) {
+    value = sample(i);
+    sum += value;
+    profile.outside += value;
+  }
+  const double end_values = first_value + value;  // value: the last sample's (ends >= 1 keeps it in this run)
   profile.trapezoid_sum = sum - 0.5 * end_values;
   profile.inside /= ends;
   profile.outside /= ends;
@@ -171,6 +191,10 @@ std::optional<RefinedTagCorners> refineTagCorners(const std::uint8_t* luma, int 
     std::array<double, 4> edge_contrast{};  // outside - inside of each outer edge, last pass
     std::array<std::vector<cv::Point2d>, 4> outer_points_u;  // the last pass's edge points, undistorted
     double outward_sign = 1.0;
+    // Scratch for the edges and segments below, reused (cleared) by each.
+    std::vector<cv::Point2d> centres_u, probes_u, centres_d, probes_d, edge_d, found_u;
+    std::vector<double> half_widths;
+    std::vector<EdgeProfile> profiles;
     for (int pass = 0; pass < std::max(1, settings.passes); ++pass) {
       // Orientation: the quad's signed area tells which side of each edge is
       // outside, whatever the winding in the image.
@@ -201,8 +225,9 @@ std::optional<RefinedTagCorners> refineTagCorners(const std::uint8_t* luma, int 
         // and a new sub-pixel phase), up to 256, kept from the corners by a
         // window and a pixel and a half so the other edge never enters it.
         int count = std::clamp(static_cast<int>(length), 8, 256);
-        std::vector<cv::Point2d> centres_u, probes_u;
-        std::vector<double> half_widths;
+        centres_u.clear();
+        probes_u.clear();
+        half_widths.clear();
         for (int i = 0; i < count; ++i) {
           double t = (i + 0.5) / count;
           double half_width = std::min(0.5 * cellAcross(t), 4.0);
@@ -213,8 +238,9 @@ std::optional<RefinedTagCorners> refineTagCorners(const std::uint8_t* luma, int 
           probes_u.push_back(toCv(centre + outward));  // 1 px outward: gives the normal's direction in the frame
           half_widths.push_back(half_width);
         }
-        std::vector<cv::Point2d> centres_d = lens.distort(centres_u), probes_d = lens.distort(probes_u);
-        std::vector<EdgeProfile> profiles;
+        lens.distort(centres_u, centres_d);
+        lens.distort(probes_u, probes_d);
+        profiles.clear();
         for (std::size_t i = 0; i < centres_d.size(); ++i) {
           glm::dvec2 centre = toGlm(centres_d[i]);
           glm::dvec2 normal = toGlm(probes_d[i]) - centre;
@@ -229,7 +255,7 @@ std::optional<RefinedTagCorners> refineTagCorners(const std::uint8_t* luma, int 
         // The tag's black and white vary slowly along an edge (lighting), so
         // a +-kNeighbours window keeps them local.
         constexpr int kNeighbours = 4;
-        std::vector<cv::Point2d> edge_d;
+        edge_d.clear();
         double contrast_sum = 0.0;
         for (const EdgeProfile& profile : profiles) contrast_sum += profile.outside - profile.inside;
         edge_contrast[k] = profiles.empty() ? 0.0 : contrast_sum / static_cast<double>(profiles.size());
@@ -314,15 +340,17 @@ std::optional<RefinedTagCorners> refineTagCorners(const std::uint8_t* luma, int 
           double keep_off = 1.5 + 0.5 * half_width;
           if (half_width < 1.0 || length < 2.0 * keep_off + 1.0) continue;
           int count = std::max(1, static_cast<int>(length - 2.0 * keep_off));
-          std::vector<cv::Point2d> centres_u, probes_u;
+          centres_u.clear();
+          probes_u.clear();
           for (int i = 0; i < count; ++i) {
             double d = keep_off + (i + 0.5) * (length - 2.0 * keep_off) / count;
             glm::dvec2 centre = a + d * along;
             centres_u.push_back(toCv(centre));
             probes_u.push_back(toCv(centre + normal));
           }
-          std::vector<cv::Point2d> centres_d = lens.distort(centres_u), probes_d = lens.distort(probes_u);
-          std::vector<EdgeProfile> profiles;
+          lens.distort(centres_u, centres_d);
+          lens.distort(probes_u, probes_d);
+          profiles.clear();
           for (std::size_t i = 0; i < centres_d.size(); ++i) {
             glm::dvec2 centre = toGlm(centres_d[i]);
             glm::dvec2 n = toGlm(probes_d[i]) - centre;
@@ -338,10 +366,10 @@ std::optional<RefinedTagCorners> refineTagCorners(const std::uint8_t* luma, int 
             outside += profile.outside / profiles.size();
           }
           if (!(std::abs(outside - inside) > 0.5 * outer_contrast)) continue;
-          std::vector<cv::Point2d> found_d;
+          edge_d.clear();
           for (const EdgeProfile& profile : profiles)
-            if (auto offset = edgeOffset(profile, inside, outside)) found_d.push_back(toCv(profile.centre + *offset * profile.outward));
-          std::vector<cv::Point2d> found_u = lens.undistort(found_d);
+            if (auto offset = edgeOffset(profile, inside, outside)) edge_d.push_back(toCv(profile.centre + *offset * profile.outward));
+          lens.undistort(edge_d, found_u);
           for (const cv::Point2d& p : found_u) refined.edge_points.push_back({toGlm(p), qa, qb});
         }
       }

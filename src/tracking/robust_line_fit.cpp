@@ -104,11 +104,17 @@ std::optional<glm::dvec3> fitLineRobust(const std::vector<glm::dvec2>& points, c
     const double length = glm::length(along);
     if (!(length > 0.0)) continue;
     const WeightedLine candidate{points[i], glm::dvec2(-along.y, along.x) / length};
-    const double median = medianDistance(points, candidate, scratch);
-    if (!start || median < start_median) {
-      start = candidate;
-      start_median = median;
+    // The candidate's median (the (n/2 + 1)-th smallest distance) beats the
+    // best one exactly when at least n/2 + 1 distances are below it: a count
+    // decides, and only a winner's median is found (nth_element's branches
+    // cost several times the counting's arithmetic).
+    if (start) {
+      std::size_t below = 0;
+      for (const glm::dvec2& p : points) below += candidate.distanceTo(p) < start_median ? 1 : 0;
+      if (below < n / 2 + 1) continue;
     }
+    start = candidate;
+    start_median = medianDistance(points, candidate, scratch);
   }
   if (!start) return std::nullopt;  // all points coincide
 
