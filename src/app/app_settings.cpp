@@ -222,7 +222,16 @@ AppSettings loadAppSettings(const std::string& path) {
   ConfigReader output = file.section("output");
   settings.save_every = output.readInt("save_every", settings.save_every, Range::atLeast(0));
   settings.gpu_finish = output.readBool("gpu_finish", settings.gpu_finish);
+  settings.resources_every_frames =
+      output.readInt("resources_every_frames", settings.resources_every_frames, Range::atLeast(0));
   output.rejectUnknownFields();
+
+  ConfigReader faults = file.section("faults");
+  settings.faults.camera_loss_every_frames =
+      faults.readInt("camera_loss_every_frames", settings.faults.camera_loss_every_frames, Range::atLeast(0));
+  settings.faults.camera_loss_failed_restarts = faults.readInt(
+      "camera_loss_failed_restarts", settings.faults.camera_loss_failed_restarts, Range::closed(0, 1000));
+  faults.rejectUnknownFields();
 
   file.rejectUnknownFields();
   return settings;

@@ -57,12 +57,26 @@ struct DisplayConfig {
   KmsDisplaySettings kms;
 };
 
+// Faults injected on purpose, for long runs that must show they cost
+// nothing (scripts/soak.sh); off by default.
+struct FaultConfig {
+  // Any source, replayed frames included (which then reconnect as a camera
+  // does): the camera is lost after every this many frames (0: never)...
+  int camera_loss_every_frames = 0;
+  // ... and this many reconnects fail before it is back.
+  int camera_loss_failed_restarts = 1;
+};
+
 // The stages' sections (stages/pipeline_settings.hpp), and the kiosk's own.
 struct AppSettings : PipelineSettings {
   ButtonConfig button;
   DisplayConfig display;
   SimConfig sim;
+  FaultConfig faults;
   int save_every = 1;     // write every K-th composited frame; 0 = none
+  // OUT/resources.csv: RSS, open descriptors and live GL objects after the
+  // first frame and every this many (app/resource_log.hpp); 0: none.
+  int resources_every_frames = 0;
 };
 
 // Reads probelight.yaml. Throws config::ConfigError (one line, file + field).

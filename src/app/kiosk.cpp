@@ -11,11 +11,13 @@
 
 #include "app/app_settings.hpp"
 #include "app/camera_link.hpp"
+#include "app/resource_log.hpp"
 #include "app/service_notify.hpp"
 #include "app/shutdown_request.hpp"
 #include "capture/image_frame_source.hpp"
 #include "capture/libcamera_source.hpp"
 #include "capture/rgb_image_io.hpp"
+#include "capture/scheduled_camera_loss.hpp"
 #include "capture/sim_frame_source.hpp"
 #include "config/camera_file.hpp"
 #include "config/config_reader.hpp"
@@ -91,6 +93,7 @@ class Kiosk {
     PROBELIGHT_TRY(setUp());
     installShutdownHandlers();
     const auto loop_start = std::chrono::steady_clock::now();
+    loop_start_s_ = monotonicNowS();
     Status status = frameLoop();
     // A bracket the run's end cut short (its frame limit, its stream, a
     // signal): the lights are fitted from what it has, and kept.
@@ -129,6 +132,9 @@ class Kiosk {
       FrameContext ctx(*lease, frames_done_++);
       ctx.frames_since_camera_start = camera_->framesSinceStart();
       PROBELIGHT_TRY(processFrame(ctx));
+      if (resources_.due(frames_done_))
+        resources_.write(frames_done_, monotonicNowS() - loop_start_s_, readProcessResources(),
+                         gles::countLiveGlObjects());
     }
     return Status::ok();
   }
@@ -279,6 +285,9 @@ class Kiosk {
     if (!options_.quiet) log_ << "probelight: " << display_->describe() << ": " << capabilities_.summary() << "\n";
     PROBELIGHT_TRY(makeStages());
     PROBELIGHT_TRY(openButtonAndLed());
+    resources_ = ResourceLog(settings.resources_every_frames);
+    if (!resources_.open((fs::path(options_.out_dir) / "resources.csv").string(), error))
+      return Status::runtimeFailure(error);
     if (!source_->start(error))
       return options_.source == "images" ? Status::badInput(error) : Status::runtimeFailure(error);
     lights_->loadStoredLighting();
@@ -299,8 +308,15 @@ class Kiosk {
     } else {
       PROBELIGHT_TRY(makeSimulatedCamera());
     }
+    // Injected losses wrap any source; replayed frames then reconnect as a
+    // camera does (a folder that really fails still ends the run).
+    const bool losses_injected = settings.faults.camera_loss_every_frames > 0;
+    if (losses_injected)
+      source_ = std::make_unique<ScheduledCameraLoss>(std::move(source_),
+                                                      static_cast<std::uint64_t>(settings.faults.camera_loss_every_frames),
+                                                      settings.faults.camera_loss_failed_restarts);
     camera_ = std::make_unique<CameraLink>(*source_, settings.camera.reconnect_max_interval_s,
-                                           options_.source != "images", report_, log_);
+                                           options_.source != "images" || losses_injected, report_, log_);
     return Status::ok();
   }
 
@@ -475,6 +491,8 @@ class Kiosk {
   std::unique_ptr<TruthMonitor> truth_;
 
   std::uint64_t frames_done_ = 0;
+  double loop_start_s_ = 0.0;
+  ResourceLog resources_{0};  // output.resources_every_frames (setUp)
   tracking::TagTrackResult last_track_;  // redrawn over the last frame while it is kept
   std::uint64_t last_frame_number_ = 0;
   ImageRGB8 last_pipeline_frame_;  // --capture only

@@ -1,5 +1,6 @@
 #include "gles/gl_objects.hpp"
 
+#include <atomic>
 #include <cstdio>
 
 #include "gles/embedded_shaders.hpp"
@@ -40,25 +41,53 @@ void deleteBuffer(GLuint name) { glDeleteBuffers(1, &name); }
 void deleteProgram(GLuint name) { glDeleteProgram(name); }
 }  // namespace detail
 
+namespace {
+
+// The highest GL name handed to this process: countLiveGlObjects' range.
+std::atomic<GLuint> highest_name{0};
+
+GLuint noteName(GLuint name) {
+  GLuint seen = highest_name.load();
+  while (name > seen && !highest_name.compare_exchange_weak(seen, name)) {
+  }
+  return name;
+}
+
+}  // namespace
+
 Texture Texture::create() {
   GLuint name = 0;
   glGenTextures(1, &name);
-  return Texture(name);
+  return Texture(noteName(name));
 }
 Framebuffer Framebuffer::create() {
   GLuint name = 0;
   glGenFramebuffers(1, &name);
-  return Framebuffer(name);
+  return Framebuffer(noteName(name));
 }
 Renderbuffer Renderbuffer::create() {
   GLuint name = 0;
   glGenRenderbuffers(1, &name);
-  return Renderbuffer(name);
+  return Renderbuffer(noteName(name));
 }
 Buffer Buffer::create() {
   GLuint name = 0;
   glGenBuffers(1, &name);
-  return Buffer(name);
+  return Buffer(noteName(name));
+}
+
+GlObjectCounts countLiveGlObjects() {
+  GlObjectCounts counts;
+  const GLuint last = highest_name.load();
+  for (GLuint name = 1; name <= last; ++name) {
+    counts.textures += glIsTexture(name) ? 1 : 0;
+    counts.framebuffers += glIsFramebuffer(name) ? 1 : 0;
+    counts.renderbuffers += glIsRenderbuffer(name) ? 1 : 0;
+    counts.buffers += glIsBuffer(name) ? 1 : 0;
+    counts.programs += glIsProgram(name) ? 1 : 0;
+    counts.shaders += glIsShader(name) ? 1 : 0;
+  }
+  return counts;
 }
 
 std::optional<Texture> createTexture2D(int width, int height, GLenum format, GLenum type, GLint filter,
@@ -202,7 +231,7 @@ GLuint compileShader(GLenum stage, std::string_view file_name, std::string_view 
   text += defines;
   text += "\n";
   text += body;
-  GLuint shader = glCreateShader(stage);
+  GLuint shader = noteName(glCreateShader(stage));
   const char* pointer = text.c_str();
   glShaderSource(shader, 1, &pointer, nullptr);
   glCompileShader(shader);
@@ -233,7 +262,7 @@ std::optional<Program> Program::fromSources(std::string_view vertex_name, std::s
     glDeleteShader(vertex);
     return std::nullopt;
   }
-  Program program(glCreateProgram());
+  Program program(noteName(glCreateProgram()));
   glAttachShader(program.id(), vertex);
   glAttachShader(program.id(), fragment);
   // Attribute 0 must be enabled on some GLES2 drivers; bind "a_position" there.

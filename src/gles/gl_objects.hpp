@@ -78,6 +78,17 @@ class Buffer : public GlName<detail::deleteBuffer> {
   static Buffer create();
 };
 
+// The driver's own count of the GL objects alive in the current context,
+// for leak checks over long runs (the soak): every name up to the highest
+// one this process was given (glGen*, glCreateProgram, glCreateShader) is
+// asked with glIs*. A leak shows as a count that grows. A name generated
+// but never bound is not yet an object, and is not counted.
+struct GlObjectCounts {
+  int textures = 0, framebuffers = 0, renderbuffers = 0, buffers = 0, programs = 0, shaders = 0;
+  int total() const { return textures + framebuffers + renderbuffers + buffers + programs + shaders; }
+};
+GlObjectCounts countLiveGlObjects();
+
 // Allocates a 2D texture with the given filter and CLAMP_TO_EDGE wrap.
 // `type` GL_UNSIGNED_BYTE or GL_HALF_FLOAT_OES; `pixels` may be null.
 std::optional<Texture> createTexture2D(int width, int height, GLenum format, GLenum type, GLint filter,

@@ -87,6 +87,9 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.sim.camera_buffers, defaults.sim.camera_buffers);
   EXPECT_EQ(from_file.save_every, defaults.save_every);
   EXPECT_EQ(from_file.gpu_finish, defaults.gpu_finish);
+  EXPECT_EQ(from_file.resources_every_frames, defaults.resources_every_frames);
+  EXPECT_EQ(from_file.faults.camera_loss_every_frames, defaults.faults.camera_loss_every_frames);
+  EXPECT_EQ(from_file.faults.camera_loss_failed_restarts, defaults.faults.camera_loss_failed_restarts);
 }
 
 // The board profiles load, and say what differs from the defaults.
@@ -165,6 +168,11 @@ TEST(AppSettings, MapUpdateFieldsAreRangeChecked) {
   expectRejected("sim:\n  camera_buffers: 1\n", "sim.camera_buffers");
   expectRejected("sim:\n  min_exposure_reported: maybe\n", "sim.min_exposure_reported");
   expectRejected("lights:\n  post_reference: 2\n", "lights.post_reference");
+  // The soak's knobs.
+  expectRejected("faults:\n  camera_loss_every_frames: -1\n", "faults.camera_loss_every_frames");
+  expectRejected("faults:\n  camera_loss_failed_restarts: 1001\n", "faults.camera_loss_failed_restarts");
+  expectRejected("faults:\n  camera_loss_every: 10\n", "camera_loss_every");
+  expectRejected("output:\n  resources_every_frames: -5\n", "output.resources_every_frames");
   // Worker threads libapriltag does not survive (its pool races before 3.4.3).
   const int too_many_threads = tracking::maxDetectorThreads() + 1;
   if (too_many_threads <= 16)

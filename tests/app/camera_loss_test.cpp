@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -122,6 +124,57 @@ TEST_F(CameraRun, ALostCameraIsReconnectedWithBackoffAndTheRunGoesOn) {
   EXPECT_EQ(report["tag_status"]["frames"]["found"].get<int>() + report["counters"].value("frames_in_bracket", 0), 24);
   EXPECT_GT(report["counters"]["frames_with_status"].get<long long>(), 0) << "the message was drawn";
   EXPECT_EQ(report["state_at_end"], "running");
+}
+
+// faults.camera_loss_every_frames loses the camera on a schedule whatever
+// the source (the soak's replayed frames): every 8 frames here, with one
+// failed reconnect each time; output.resources_every_frames logs RSS, open
+// descriptors and the driver's live GL objects after the first frame and
+// every 10th, and a loss leaks no GL object or descriptor.
+TEST_F(CameraRun, InjectedLossesReconnectAndTheResourcesAreLogged) {
+  const testing::CommandResult result = runSim(
+      "faults",
+      "  resources_every_frames: 10\nfaults:\n  camera_loss_every_frames: 8\n  camera_loss_failed_restarts: 1\n", 30);
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find("injected by faults.camera_loss_every_frames after 8 frames"), std::string::npos)
+      << result.stderr_text;
+  const nlohmann::json report = readReport(dir_ / "faults");
+  // The simulated camera makes 30 frames; those in its pool when it is lost
+  // are dropped with it, as a real camera's queued requests are.
+  const long long frames = report["frames"].get<long long>();
+  EXPECT_GE(frames, 24);
+  EXPECT_LE(frames, 30);
+  // Lost after frames 8, 16 and 24 (the count starts again at each reconnect).
+  EXPECT_EQ(report["camera"]["losses"], 3);
+  EXPECT_EQ(report["camera"]["reconnect_failures"], 3);
+  EXPECT_EQ(report["camera"]["reconnects"], 3);
+  // Each loss waits 0.5 s, then 1 s after the failed attempt.
+  EXPECT_GE(report["elapsed_s"].get<double>(), 4.5);
+  std::ifstream csv(dir_ / "faults" / "resources.csv");
+  std::string header;
+  ASSERT_TRUE(std::getline(csv, header));
+  EXPECT_EQ(header.rfind("frames,elapsed_s,rss_kib,open_fds,gl_objects,", 0), 0u) << header;
+  std::vector<std::vector<long long>> rows;
+  for (std::string line; std::getline(csv, line);) {
+    std::vector<long long> row;
+    std::stringstream fields(line);
+    for (std::string field; std::getline(fields, field, ',');) row.push_back(std::stoll(field));
+    rows.push_back(row);
+  }
+  ASSERT_EQ(rows.size(), static_cast<std::size_t>(1 + frames / 10));  // frames 1, 10, 20 (and 30)
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    ASSERT_EQ(rows[i].size(), 11u);
+    EXPECT_EQ(rows[i][0], i == 0 ? 1 : static_cast<long long>(10 * i));
+    EXPECT_GT(rows[i][2], 10000) << "RSS in KiB";
+    EXPECT_GE(rows[i][3], 3) << "at least stdin, stdout and stderr";
+    EXPECT_GT(rows[i][4], 0) << "live GL objects";
+  }
+  // Across the losses nothing more is held: the same GL objects and
+  // descriptors at frame 20 (and 30) as at frame 10.
+  for (std::size_t i = 2; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i][4], rows[1][4]) << "frame " << rows[i][0];
+    EXPECT_EQ(rows[i][3], rows[1][3]) << "frame " << rows[i][0];
+  }
 }
 
 // With the settle time at 0, every recalibration (here the start-up one)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -135,6 +136,29 @@ TEST_F(GpuTest, TheSrgbDecodeMatchesTheCurveAcrossItsRange) {
               worst_upper, worst_lower);
   EXPECT_LE(worst_upper, 1.1e-4);
   EXPECT_LE(worst_lower, 1e-5);
+}
+
+// The soak's GL object count is the driver's (glIs*), not our own tally:
+// a bound texture and framebuffer are counted while they live, and not
+// after their owners free them.
+TEST_F(GpuTest, TheDriversObjectCountFollowsCreationAndDeletion) {
+  const gles::GlObjectCounts before = gles::countLiveGlObjects();
+  {
+    std::string error;
+    std::optional<gles::Texture> texture = gles::createTexture2D(4, 4, GL_RGBA, GL_UNSIGNED_BYTE, GL_NEAREST, nullptr, error);
+    ASSERT_TRUE(texture.has_value()) << error;
+    gles::Framebuffer framebuffer = gles::Framebuffer::create();
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer.id());
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    const gles::GlObjectCounts during = gles::countLiveGlObjects();
+    EXPECT_EQ(during.textures, before.textures + 1);
+    EXPECT_EQ(during.framebuffers, before.framebuffers + 1);
+    EXPECT_EQ(during.total(), before.total() + 2);
+  }
+  const gles::GlObjectCounts after = gles::countLiveGlObjects();
+  EXPECT_EQ(after.textures, before.textures);
+  EXPECT_EQ(after.framebuffers, before.framebuffers);
+  EXPECT_EQ(after.total(), before.total());
 }
 
 TEST_F(GpuTest, RenderTargetReadsBackTopRowFirst) {

@@ -1,8 +1,11 @@
 // ImageFrameSource: files in name order, undecodable ones skipped, end of stream.
+#include <memory>
+
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "capture/image_frame_source.hpp"
+#include "capture/scheduled_camera_loss.hpp"
 #include "test_support.hpp"
 
 namespace probelight {
@@ -86,6 +89,35 @@ TEST(ImageFrameSource, GlobPatternAndLooping) {
   for (std::size_t i = 0; i < 5; ++i) {
     EXPECT_EQ(frames[i].origin, folder.file(expected[i])) << i;
     EXPECT_EQ(frames[i].sequence, i);
+  }
+  source.stop();
+}
+
+// The injected loss (faults.camera_loss_*), around a real source: after
+// every 2 frames the next wait fails as a lost camera's does, until a stop
+// and the second start() (the first fails as told); then frames come again,
+// from the replay's start, as a restarted camera's do.
+TEST(ScheduledCameraLoss, LosesTheCameraOnScheduleAndFailsTheToldRestarts) {
+  TempFolder folder;
+  for (const char* name : {"a.png", "b.png", "c.png"}) writeSolidPng(folder.file(name), 8, 8, {0, 0, 0});
+  ScheduledCameraLoss source(std::make_unique<ImageFrameSource>(folder.path().string()), 2, 1);
+  EXPECT_EQ(source.name(), "images:" + folder.path().string());
+  std::string error;
+  ASSERT_TRUE(source.start(error)) << error;
+  for (int cycle = 0; cycle < 2; ++cycle) {
+    std::vector<ReceivedFrame> frames;
+    EXPECT_EQ(collect(source, frames), FrameWait::kError) << "cycle " << cycle;
+    ASSERT_EQ(frames.size(), 2u) << "cycle " << cycle;
+    EXPECT_EQ(frames[0].origin, folder.file("a.png")) << "the replay starts over";
+    EXPECT_EQ(frames[1].origin, folder.file("b.png"));
+    EXPECT_NE(source.lastError().find("faults.camera_loss_every_frames"), std::string::npos) << source.lastError();
+    EXPECT_EQ(source.lossesInjected(), static_cast<std::uint64_t>(cycle + 1));
+    source.stop();
+    EXPECT_FALSE(source.start(error));
+    EXPECT_NE(error.find("faults.camera_loss_failed_restarts"), std::string::npos) << error;
+    EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+    error.clear();
+    ASSERT_TRUE(source.start(error)) << error;
   }
   source.stop();
 }
