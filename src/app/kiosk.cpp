@@ -92,14 +92,13 @@ class Kiosk {
   Status run() {
     PROBELIGHT_TRY(setUp());
     installShutdownHandlers();
-    const auto loop_start = std::chrono::steady_clock::now();
     loop_start_s_ = monotonicNowS();
     Status status = frameLoop();
     // A bracket the run's end cut short (its frame limit, its stream, a
     // signal): the lights are fitted from what it has, and kept.
     if (status.isOk()) status = lights_->finishPendingBracket(last_frame_number_, *maps_);
     notifier_.stopping();
-    const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+    const double elapsed_s = monotonicNowS() - loop_start_s_;
     source_->stop();
     PROBELIGHT_TRY(status);
     if (std::string error; !display_->finish(error)) return Status::runtimeFailure(error);
@@ -491,7 +490,7 @@ class Kiosk {
   std::unique_ptr<TruthMonitor> truth_;
 
   std::uint64_t frames_done_ = 0;
-  double loop_start_s_ = 0.0;
+  double loop_start_s_ = 0.0;  // the frame loop's start (monotonicNowS): report.json's elapsed_s, resources.csv's
   ResourceLog resources_{0};  // output.resources_every_frames (setUp)
   tracking::TagTrackResult last_track_;  // redrawn over the last frame while it is kept
   std::uint64_t last_frame_number_ = 0;
