@@ -11,9 +11,10 @@
 // hides. The map holds the object's far side from the light
 // (ground_shadow.cpp says why).
 //
-// Precision: positions are metres within half a metre and depths are in
-// [0, 1] of a few centimetres' range; mediump (10 bits) resolves depth to
-// ~1/1000 of the object's size, which the bias covers.
+// Precision: the ground point arrives in the light's clip space (made at
+// highp in the vertex shader) and depths are in [0, 1] of a few
+// centimetres' range; mediump (11 significant bits) resolves depth to
+// ~1/2000 of the object's size, which the bias covers.
 #include "depth_packing.glsl"
 
 #define TAPS 16
@@ -21,7 +22,6 @@
 const float kEmpty01 = 0.01;
 
 uniform sampler2D u_shadow_map;
-uniform mat4 u_light_clip_from_world;
 uniform vec3 u_share;
 uniform float u_tan_cone;
 // How the ground's own depth changes across the map, per unit of uv: the
@@ -36,7 +36,7 @@ uniform float u_texel_uv;       // one shadow-map texel, in uv
 // a sphere's contact) the ground is hidden, not lit.
 uniform float u_bias01;
 uniform vec2 u_taps[TAPS];      // a unit disc, evenly covered
-varying vec2 v_ground_w;
+varying vec3 v_light_clip;  // ground_shadow.vert: the ground point in the light's clip space
 
 float storedDepth(vec2 uv) {
 #ifdef SHADOW_DEPTH_PACKED
@@ -47,7 +47,7 @@ float storedDepth(vec2 uv) {
 }
 
 void main() {
-  vec4 clip = u_light_clip_from_world * vec4(v_ground_w, 0.0, 1.0);
+  vec3 clip = v_light_clip;
   vec2 uv = 0.5 * clip.xy + 0.5;
   // The object lies within depths 0.02-0.98 of its frustum; the map holds
   // its far side and is cleared to 0 where it is absent.

@@ -35,9 +35,14 @@ uniform vec2 u_center_normalized;        // ball centre in the camera: (x/z, y/z
 uniform float u_radius_over_depth;       // radius / ball centre's camera z
 uniform vec4 u_distortion;               // k1 k2 p1 p2
 uniform float u_distortion_k3;
-uniform vec2 u_center_distorted;   // distortNormalized(u_center_normalized)
+uniform float u_center_r2;         // |u_center_normalized|^2
+uniform float u_center_radial;     // the radial distortion factor there
 uniform vec2 u_focal_over_size;    // (fx / width, fy / height)
-uniform vec2 u_center_texcoord;    // texcoord of the ball centre's projection
+// Texcoord of the ball centre's projection as a value that 11 significant
+// bits hold exactly, plus the rest: mediump would otherwise round the
+// uniform itself by up to half an ulp (0.16 px) before the sum rounds again.
+uniform vec2 u_center_texcoord;
+uniform vec2 u_center_texcoord_residual;
 uniform sampler2D u_camera;        // sRGB bytes, LINEAR, CLAMP_TO_EDGE
 uniform float u_inverse_reflectance;
 uniform float u_storage_scale;     // linear_scale of cube_storage.glsl
@@ -72,9 +77,14 @@ void main() {
   vec3 offset = u_radius_over_depth * normal;
   float depth_ratio = 1.0 + offset.z;
   blind = blind || depth_ratio <= 0.0;
-  vec2 normalized = (u_center_normalized + offset.xy) / max(depth_ratio, 1e-3);
-  vec2 distorted = distortNormalized(normalized, u_distortion, u_distortion_k3);
-  vec2 texcoord = u_center_texcoord + (distorted - u_center_distorted) * u_focal_over_size;
+  // The point's normalised position relative to the centre's,
+  // (c + offset.xy) / (1 + offset.z) - c, and its distortion likewise, so
+  // that nothing of the centre's O(1) size is added in and taken out again
+  // (at 16 bits that alone moved the sample by 0.3 px).
+  vec2 normalized_delta = (offset.xy - u_center_normalized * offset.z) / max(depth_ratio, 1e-3);
+  vec2 distorted_delta = distortionDelta(u_center_normalized, normalized_delta, u_center_r2, u_center_radial,
+                                         u_distortion, u_distortion_k3);
+  vec2 texcoord = u_center_texcoord + (distorted_delta * u_focal_over_size + u_center_texcoord_residual);
   vec3 linear = decodeCamera(texture2D(u_camera, texcoord).rgb) * u_inverse_reflectance;
   gl_FragColor = blind ? vec4(0.0) : encodeCubeTexel(linear, 1.0, u_storage_scale);
 }

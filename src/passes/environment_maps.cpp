@@ -11,6 +11,7 @@
 
 #include "ibl/camera_projection.hpp"
 #include "ibl/color_transfer.hpp"
+#include "passes/cube_face_basis.hpp"
 #include "passes/framebuffer_state_guard.hpp"
 
 namespace probelight::passes {
@@ -23,22 +24,15 @@ namespace {
 // ibl::probeImageToCubeMap assumes.
 constexpr double kPixelCenterToTexelCenter = 0.5;
 
-struct FaceBasis {
-  glm::vec3 center;
-  glm::vec3 s_axis;
-  glm::vec3 t_axis;
-};
+// A 16-bit float's significand: 10 stored bits and the implicit one.
+constexpr int kMediumpSignificantBits = 11;
 
-// direction = center + (2s - 1) s_axis + (2t - 1) t_axis, per the GLES cube
-// table (ibl::cubeCoordToDirection).
-constexpr std::array<FaceBasis, 6> kFaceBases{{
-    {{1, 0, 0}, {0, 0, -1}, {0, -1, 0}},
-    {{-1, 0, 0}, {0, 0, 1}, {0, -1, 0}},
-    {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},
-    {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}},
-    {{0, 0, 1}, {1, 0, 0}, {0, -1, 0}},
-    {{0, 0, -1}, {-1, 0, 0}, {0, -1, 0}},
-}};
+// x rounded to `bits` significant binary digits (to nearest).
+double roundToSignificantBits(double x, int bits) {
+  if (x == 0.0 || !std::isfinite(x)) return x;
+  const int exponent = std::ilogb(x);
+  return std::ldexp(std::nearbyint(std::ldexp(x, bits - 1 - exponent)), exponent - (bits - 1));
+}
 
 void setFaceUniforms(const gles::Program& program, int face) {
   const FaceBasis& basis = kFaceBases[static_cast<size_t>(face)];
@@ -237,6 +231,33 @@ bool EnvironmentMaps::allocate(GpuCubeMap& map, int face_size, std::string& erro
   return true;
 }
 
+ProbeToCubeUniforms probeToCubeUniforms(const ibl::MirrorBallView& view, double probe_reflectance) {
+  ProbeToCubeUniforms u;
+  const CameraIntrinsics& camera = view.camera;
+  const glm::dvec3 center_cam = view.pose.toCamera(view.center_w);
+  u.R_cam_from_world = view.pose.R_cam_from_world;
+  // The shader works in the camera's frame: the eye relative to the ball
+  // centre, in radii, is -centre_cam / radius there.
+  u.eye_ball = -center_cam / view.radius_m;
+  u.eye_direction = glm::normalize(u.eye_ball);
+  u.center_normalized = {center_cam.x / center_cam.z, center_cam.y / center_cam.z};
+  u.radius_over_depth = view.radius_m / center_cam.z;
+  u.distortion = {camera.distortion[0], camera.distortion[1], camera.distortion[2], camera.distortion[3]};
+  u.distortion_k3 = camera.distortion[4];
+  u.center_r2 = glm::dot(u.center_normalized, u.center_normalized);
+  u.center_radial = 1.0 + u.center_r2 * (u.distortion[0] + u.center_r2 * (u.distortion[1] + u.center_r2 * u.distortion_k3));
+  const glm::dvec2 center_px = ibl::projectToPixel(camera, center_cam);
+  const glm::dvec2 size_px{camera.width_px, camera.height_px};
+  const glm::dvec2 center_texcoord = (center_px + kPixelCenterToTexelCenter) / size_px;
+  u.center_texcoord = {roundToSignificantBits(center_texcoord.x, kMediumpSignificantBits),
+                       roundToSignificantBits(center_texcoord.y, kMediumpSignificantBits)};
+  u.center_texcoord_residual = center_texcoord - u.center_texcoord;
+  u.focal_over_size = glm::dvec2(camera.fx_px, camera.fy_px) / size_px;
+  u.inverse_reflectance = 1.0 / probe_reflectance;
+  u.storage_scale = static_cast<float>(std::max(1.0, 1.0 / probe_reflectance));
+  return u;
+}
+
 bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, const ibl::MirrorBallView& view,
                                        double probe_reflectance, std::string& error) {
   if (camera_frame.empty()) {
@@ -260,18 +281,7 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
             std::to_string(center_cam.z) + " m); check the pose and rig.yaml's probe_center_w";
     return false;
   }
-  const CameraIntrinsics& camera = view.camera;
-  // The shader works in the camera's frame: the eye relative to the ball
-  // centre, in radii, is -centre_cam / radius there.
-  const glm::dvec3 eye_ball = -center_cam / view.radius_m;
-  const glm::dvec2 center_normalized{center_cam.x / center_cam.z, center_cam.y / center_cam.z};
-  const glm::dvec2 center_px = ibl::projectToPixel(camera, center_cam);
-  const glm::dvec2 center_distorted{(center_px.x - camera.cx_px) / camera.fx_px,
-                                    (center_px.y - camera.cy_px) / camera.fy_px};
-  const glm::dvec2 size_px{camera.width_px, camera.height_px};
-  const glm::dvec2 center_texcoord = (center_px + kPixelCenterToTexelCenter) / size_px;
-  const glm::dvec2 focal_over_size = glm::dvec2(camera.fx_px, camera.fy_px) / size_px;
-  const float storage_scale = static_cast<float>(std::max(1.0, 1.0 / probe_reflectance));
+  const ProbeToCubeUniforms u = probeToCubeUniforms(view, probe_reflectance);
 
   FramebufferStateGuard guard;
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
@@ -279,27 +289,28 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
   probe_program_.use();
-  glUniform3f(probe_program_.uniform("u_eye_ball"), static_cast<float>(eye_ball.x), static_cast<float>(eye_ball.y),
-              static_cast<float>(eye_ball.z));
-  const glm::dvec3 eye_direction = glm::normalize(eye_ball);
-  glUniform3f(probe_program_.uniform("u_eye_direction"), static_cast<float>(eye_direction.x),
-              static_cast<float>(eye_direction.y), static_cast<float>(eye_direction.z));
-  glUniform2f(probe_program_.uniform("u_center_normalized"), static_cast<float>(center_normalized.x),
-              static_cast<float>(center_normalized.y));
-  glUniform1f(probe_program_.uniform("u_radius_over_depth"), static_cast<float>(view.radius_m / center_cam.z));
-  glUniform4f(probe_program_.uniform("u_distortion"), static_cast<float>(camera.distortion[0]),
-              static_cast<float>(camera.distortion[1]), static_cast<float>(camera.distortion[2]),
-              static_cast<float>(camera.distortion[3]));
-  glUniform1f(probe_program_.uniform("u_distortion_k3"), static_cast<float>(camera.distortion[4]));
-  glUniform2f(probe_program_.uniform("u_center_distorted"), static_cast<float>(center_distorted.x),
-              static_cast<float>(center_distorted.y));
-  glUniform2f(probe_program_.uniform("u_focal_over_size"), static_cast<float>(focal_over_size.x),
-              static_cast<float>(focal_over_size.y));
-  glUniform2f(probe_program_.uniform("u_center_texcoord"), static_cast<float>(center_texcoord.x),
-              static_cast<float>(center_texcoord.y));
-  glUniform1f(probe_program_.uniform("u_inverse_reflectance"), static_cast<float>(1.0 / probe_reflectance));
+  auto set3 = [&](const char* name, const glm::dvec3& v) {
+    glUniform3f(probe_program_.uniform(name), static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z));
+  };
+  auto set2 = [&](const char* name, const glm::dvec2& v) {
+    glUniform2f(probe_program_.uniform(name), static_cast<float>(v.x), static_cast<float>(v.y));
+  };
+  set3("u_eye_ball", u.eye_ball);
+  set3("u_eye_direction", u.eye_direction);
+  set2("u_center_normalized", u.center_normalized);
+  glUniform1f(probe_program_.uniform("u_radius_over_depth"), static_cast<float>(u.radius_over_depth));
+  glUniform4f(probe_program_.uniform("u_distortion"), static_cast<float>(u.distortion[0]),
+              static_cast<float>(u.distortion[1]), static_cast<float>(u.distortion[2]),
+              static_cast<float>(u.distortion[3]));
+  glUniform1f(probe_program_.uniform("u_distortion_k3"), static_cast<float>(u.distortion_k3));
+  glUniform1f(probe_program_.uniform("u_center_r2"), static_cast<float>(u.center_r2));
+  glUniform1f(probe_program_.uniform("u_center_radial"), static_cast<float>(u.center_radial));
+  set2("u_focal_over_size", u.focal_over_size);
+  set2("u_center_texcoord", u.center_texcoord);
+  set2("u_center_texcoord_residual", u.center_texcoord_residual);
+  glUniform1f(probe_program_.uniform("u_inverse_reflectance"), static_cast<float>(u.inverse_reflectance));
   glUniform1f(probe_program_.uniform("u_camera_gamma"), static_cast<float>(settings_.camera_transfer.gamma));
-  glUniform1f(probe_program_.uniform("u_storage_scale"), storage_scale);
+  glUniform1f(probe_program_.uniform("u_storage_scale"), u.storage_scale);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, camera_frame.texture());
   glUniform1i(probe_program_.uniform("u_camera"), 0);
@@ -308,16 +319,14 @@ bool EnvironmentMaps::updateReflection(const CameraFrameTexture& camera_frame, c
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face),
                            reflection_.texture.id(), 0);
     const FaceBasis& basis = kFaceBases[static_cast<size_t>(face)];
-    const glm::dmat3& rotation = view.pose.R_cam_from_world;
-    const glm::vec3 center_cam_axis(rotation * glm::dvec3(basis.center)), s_axis_cam(rotation * glm::dvec3(basis.s_axis)),
-        t_axis_cam(rotation * glm::dvec3(basis.t_axis));
-    glUniform3fv(probe_program_.uniform("u_face_center_cam"), 1, glm::value_ptr(center_cam_axis));
-    glUniform3fv(probe_program_.uniform("u_face_s_axis_cam"), 1, glm::value_ptr(s_axis_cam));
-    glUniform3fv(probe_program_.uniform("u_face_t_axis_cam"), 1, glm::value_ptr(t_axis_cam));
+    const glm::dmat3& rotation = u.R_cam_from_world;
+    set3("u_face_center_cam", rotation * glm::dvec3(basis.center));
+    set3("u_face_s_axis_cam", rotation * glm::dvec3(basis.s_axis));
+    set3("u_face_t_axis_cam", rotation * glm::dvec3(basis.t_axis));
     quad_.draw(position);
   }
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, 0);
-  reflection_.linear_scale = storage_ == CubeStorage::kSrgb8 ? storage_scale : 1.0f;
+  reflection_.linear_scale = storage_ == CubeStorage::kSrgb8 ? u.storage_scale : 1.0f;
   return gles::checkGl("EnvironmentMaps::updateReflection", error);
 }
 

@@ -228,6 +228,29 @@ class EnvironmentMaps {
   bool glossy_written_ = false;
 };
 
+// probe_to_cube's uniforms for a view of the ball (the CPU's share of stage
+// 2, in double; GL takes them as floats). The vertex shader's face axes are
+// R_cam_from_world times kFaceBases' (cube_face_basis.hpp).
+struct ProbeToCubeUniforms {
+  glm::dmat3 R_cam_from_world{1.0};
+  glm::dvec3 eye_ball{0.0};       // (camera centre - ball centre) / radius, camera frame
+  glm::dvec3 eye_direction{0.0};  // normalize(eye_ball)
+  glm::dvec2 center_normalized{0.0};
+  double radius_over_depth = 0.0;
+  glm::dvec4 distortion{0.0};  // k1 k2 p1 p2
+  double distortion_k3 = 0.0;
+  double center_r2 = 0.0;      // |center_normalized|^2
+  double center_radial = 1.0;  // 1 + k1 r2 + k2 r2^2 + k3 r2^3 there
+  glm::dvec2 focal_over_size{0.0};
+  // The centre's texcoord, as a value 11 significant bits hold exactly
+  // (16-bit mediump's) plus the rest.
+  glm::dvec2 center_texcoord{0.0};
+  glm::dvec2 center_texcoord_residual{0.0};
+  double inverse_reflectance = 1.0;
+  float storage_scale = 1.0f;  // linear_scale of an 8-bit reflection map
+};
+ProbeToCubeUniforms probeToCubeUniforms(const ibl::MirrorBallView& view, double probe_reflectance);
+
 // GLSL #define lines selecting a storage's encoding in cube_storage.glsl.
 std::string cubeStorageDefines(CubeStorage storage);
 

@@ -18,10 +18,18 @@ constexpr double kFrustumMargin = 1.04;
 // bounding radius): two 10-bit mediump steps. Ground points that close to
 // the object's far side (where it stands on the ground) count as hidden;
 // the ground never shadows itself, so there is no acne to fight.
-constexpr float kBias01 = 2.0f / 1024.0f;
-constexpr int kTaps = 16;
 
 }  // namespace
+
+std::array<glm::vec2, kShadowTaps> shadowDiscTaps() {
+  std::array<glm::vec2, kShadowTaps> taps{};
+  for (int k = 0; k < kShadowTaps; ++k) {
+    // Golden-angle spiral: even cover of the unit disc by equal areas.
+    const double r = std::sqrt((k + 0.5) / kShadowTaps), phi = k * kPi * (3.0 - std::sqrt(5.0));
+    taps[static_cast<size_t>(k)] = glm::vec2(static_cast<float>(r * std::cos(phi)), static_cast<float>(r * std::sin(phi)));
+  }
+  return taps;
+}
 
 LightView lightViewFor(const glm::dvec3& direction_w, const glm::dvec3& centre_w, double radius_m) {
   const glm::dvec3 d = glm::normalize(direction_w);
@@ -331,15 +339,9 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   glUniform1f(ground_program_.uniform("u_map_width_m"), static_cast<float>(views[0].width_m));
   glUniform1f(ground_program_.uniform("u_depth_range_m"), static_cast<float>(views[0].depth_m));
   glUniform1f(ground_program_.uniform("u_texel_uv"), 1.0f / static_cast<float>(size));
-  glUniform1f(ground_program_.uniform("u_bias01"), kBias01);
-  std::vector<float> taps;
-  for (int k = 0; k < kTaps; ++k) {
-    // Golden-angle spiral: even cover of the unit disc by equal areas.
-    const double r = std::sqrt((k + 0.5) / kTaps), phi = k * kPi * (3.0 - std::sqrt(5.0));
-    taps.push_back(static_cast<float>(r * std::cos(phi)));
-    taps.push_back(static_cast<float>(r * std::sin(phi)));
-  }
-  glUniform2fv(ground_program_.uniform("u_taps[0]"), kTaps, taps.data());
+  glUniform1f(ground_program_.uniform("u_bias01"), kShadowBias01);
+  const std::array<glm::vec2, kShadowTaps> taps = shadowDiscTaps();
+  glUniform2fv(ground_program_.uniform("u_taps[0]"), kShadowTaps, glm::value_ptr(taps[0]));
   glUniform1i(ground_program_.uniform("u_shadow_map"), 0);
   glEnable(GL_BLEND);
   glBlendEquation(GL_FUNC_REVERSE_SUBTRACT);  // destination - source

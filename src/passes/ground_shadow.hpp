@@ -101,6 +101,13 @@ class GroundShadow {
   int shadow_passes_last_update_ = 0;
 };
 
+// ground_shadow.frag's constants: the blockers' depth test passes this much
+// of the light's depth range behind the ground, and each search and filter
+// reads kShadowTaps taps of a unit disc, evenly spread (shadowDiscTaps).
+inline constexpr float kShadowBias01 = 2.0f / 1024.0f;
+inline constexpr int kShadowTaps = 16;
+std::array<glm::vec2, kShadowTaps> shadowDiscTaps();
+
 // The orthographic light view of a directional light that holds a bounding
 // sphere (centre, radius) with a little margin: clip = M (x_w, 1). Its
 // frustum is `width_m` across and `depth_m` deep, starting just outside the

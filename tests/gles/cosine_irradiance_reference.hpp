@@ -27,7 +27,7 @@
 //    through the north pass and the resampling (the north taps fetch texel
 //    centres: no direction error there);
 //  - the north map's storage, through the resampling;
-//  - fp32 directions: ~1e-5 rad of error (single precision through
+//  - fp32 directions: ~1e-5 rad of error, direction_error_rad (single precision through
 //    normalize, cross, atan and the tap rotation, and llvmpipe's polynomial
 //    sin/cos) moves a bilinear sample of the prefiltered cube by
 //    <= 1e-5 * face_size texels, and the resampling's lookup in the north
@@ -134,7 +134,7 @@ inline double prefilterWeightDelta(int input_face_size, int factor) {
 inline CosineReference cosineIrradianceReference(const ibl::CubeMapRGB& radiance, const std::vector<float>& validity,
                                                  const passes::EnvironmentMapSettings& settings,
                                                  passes::CubeStorage storage, double scale, double input_levels,
-                                                 double unit_roundoff) {
+                                                 double unit_roundoff, double direction_error_rad = 1e-5) {
   using detail::mapTexels;
   const ibl::CosineIrradianceSettings cosine = passes::cosineIrradianceSettings(settings);
   const int factor = radiance.face_size / settings.prefilter_face_size;
@@ -160,7 +160,6 @@ inline CosineReference cosineIrradianceReference(const ibl::CubeMapRGB& radiance
   const auto after_north = [&](const ibl::LatLongRGB& m) { return ibl::latLongToCube(m, cosine.output_face_size); };
 
   const double delta = detail::prefilterWeightDelta(radiance.face_size, factor);
-  const double direction_error_rad = 1e-5;
   const double rgb_levels = 0.7, alpha_levels = 0.75;
   const double alpha_rounding = storage == passes::CubeStorage::kSrgb8 ? alpha_levels / 255.0 : std::ldexp(1.0, -11);
 

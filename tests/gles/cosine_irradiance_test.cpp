@@ -14,6 +14,7 @@
 
 #include "cosine_irradiance_reference.hpp"
 #include "gles_test_support.hpp"
+#include "test_scenes.hpp"
 #include "ibl/irradiance.hpp"
 #include "ibl/spherical_blur.hpp"
 #include "passes/environment_maps.hpp"
@@ -22,33 +23,10 @@ namespace probelight {
 namespace {
 
 using test::GpuTest;
-
-// A small lamp 6.4 deg from the zenith, so the north pass carries it over the
-// pole of the latitude-longitude maps, and a 0.4-rad blind spot below the
-// horizon (rgb 0, validity 0).
-const glm::dvec3 kZenithLamp = glm::normalize(glm::dvec3(0.1, 0.05, 1.0));
-constexpr double kZenithLampRadiusRad = 6.0 * M_PI / 180.0;
-const glm::dvec3 kBlindSpot = glm::normalize(glm::dvec3(0.2, -0.9, -0.4));
-
-ibl::CubeMapRGB zenithLampRoom(int face_size, double lamp_gain, std::vector<float>& validity) {
-  ibl::CubeMapRGB cube(face_size);
-  validity.assign(static_cast<size_t>(ibl::kCubeFaceCount) * face_size * face_size, 1.0f);
-  for (int face = 0; face < ibl::kCubeFaceCount; ++face) {
-    for (int y = 0; y < face_size; ++y) {
-      for (int x = 0; x < face_size; ++x) {
-        const glm::dvec3 d = ibl::cubeTexelCenterDirection(face, x, y, face_size);
-        glm::dvec3 value = test::analyticEnvironment(d);
-        if (glm::dot(d, kZenithLamp) > std::cos(kZenithLampRadiusRad)) value += lamp_gain * glm::dvec3(1.0, 0.9, 0.8);
-        if (glm::dot(d, kBlindSpot) > std::cos(0.4)) {
-          value = glm::dvec3(0.0);
-          validity[static_cast<size_t>(face) * face_size * face_size + static_cast<size_t>(y) * face_size + x] = 0.0f;
-        }
-        cube.texel(face, x, y) = glm::vec3(value);
-      }
-    }
-  }
-  return cube;
-}
+using test::kBlindSpot;
+using test::kZenithLamp;
+using test::kZenithLampRadiusRad;
+using test::zenithLampRoom;
 
 double fragmentUnitRoundoff() {
   const gles::Capabilities& caps = test::sharedCapabilities();

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "gles_test_support.hpp"
+#include "test_scenes.hpp"
 #include "ibl/mirror_ball.hpp"
 #include "ibl/probe_to_cube.hpp"
 #include "passes/camera_frame_texture.hpp"
@@ -18,55 +19,10 @@ namespace probelight {
 namespace {
 
 using test::GpuTest;
-
-constexpr double kProbeReflectance = 0.7;
-
-ibl::MirrorBallView testBallView() {
-  ibl::MirrorBallView view;
-  view.camera = test::testCamera();
-  view.center_w = {0.12, 0.0, 0.08};
-  view.radius_m = 0.03;
-  // Off-axis so the ball sits away from the image centre, where distortion
-  // and perspective both matter.
-  view.pose = test::lookAt({-0.10, -0.42, 0.36}, {0.02, 0.02, 0.02});
-  return view;
-}
-
-// The camera frame of the ball in the analytic environment, rendered from
-// exact per-pixel reflection (ibl::pixelToReflectedDirection); elsewhere a
-// gradient so edge samples pick up something unlike the ball.
-ImageRGB8 renderBallImage(const ibl::MirrorBallView& view) {
-  ImageRGB8 image;
-  image.resize(view.camera.width_px, view.camera.height_px);
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < image.width; ++x) {
-      glm::dvec3 linear{0.05 + 0.4 * x / image.width, 0.3, 0.05 + 0.4 * y / image.height};
-      if (auto reflected = ibl::pixelToReflectedDirection(view, {x, y})) {
-        linear = test::analyticEnvironment(*reflected) * kProbeReflectance;
-      }
-      for (int c = 0; c < 3; ++c) {
-        image.row(y)[3 * x + c] = static_cast<std::uint8_t>(std::lround(ibl::linearToSrgb(linear[c]) * 255.0));
-      }
-    }
-  }
-  return image;
-}
-
-// Max - min of the 2x2 bytes a bilinear sample at `pixel` reads (texcoord =
-// (pixel + 0.5) / size: OpenCV pixel centres at integers), per channel, in 8-bit levels.
-glm::dvec3 bilinearNeighbourhoodRange(const ImageRGB8& image, const glm::dvec2& pixel) {
-  const int x0 = std::clamp(static_cast<int>(std::floor(pixel.x)), 0, image.width - 1);
-  const int y0 = std::clamp(static_cast<int>(std::floor(pixel.y)), 0, image.height - 1);
-  const int x1 = std::min(x0 + 1, image.width - 1);
-  const int y1 = std::min(y0 + 1, image.height - 1);
-  glm::dvec3 range(0.0);
-  for (int c = 0; c < 3; ++c) {
-    const int values[4] = {image.row(y0)[3 * x0 + c], image.row(y0)[3 * x1 + c], image.row(y1)[3 * x0 + c],
-                           image.row(y1)[3 * x1 + c]};
-    range[c] = *std::max_element(values, values + 4) - *std::min_element(values, values + 4);
-  }
-  return range;
-}
+using test::bilinearNeighbourhoodRange;
+using test::kProbeReflectance;
+using test::renderBallImage;
+using test::testBallView;
 
 struct ProbeComparison {
   double max_error_levels = 0.0;    // |GPU - CPU| in 8-bit encoded levels
