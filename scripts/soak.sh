@@ -8,9 +8,11 @@
 #     (default 10,000) and its first reconnect fails (faults.* in
 #     probelight.yaml: the frames are replayed, so the loss is injected; the
 #     reconnect restarts the replay, as a camera's restart would).
-# Replayed frames have no exposure control, so a recalibration's bracket
-# falls back to the single-frame fit here: the bracket's own path is not
-# exercised (the simulated camera's tests cover it).
+#   - exposure brackets: each press's recalibration takes one, as on a
+#     camera: the frame is also replayed at BRACKET_STOPS (default
+#     "-3 -6 -9 -12", the bracket's ladder) from exposure sets that
+#     scripts/replay-frames.sh renders, and the source serves each rung from
+#     the nearest set (ImageFrameSource).
 #
 # probelight itself samples after its first frame and every 1,000 frames
 # (output.resources_every_frames): its resident memory (VmRSS), its open
@@ -26,12 +28,14 @@
 # usage: scripts/soak.sh [FRAMES] [OUT]   (default 100000, out/soak)
 #   PROBELIGHT=path/to/probelight (default build/probelight)
 #   LOSS_EVERY=frames between camera losses (default 10000; 0: none)
+#   BRACKET_STOPS=the exposure sets to replay (default "-3 -6 -9 -12"; "": no brackets)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 frames=${1:-100000}
 out=${2:-out/soak}
 probelight=${PROBELIGHT:-build/probelight}
 loss_every=${LOSS_EVERY:-10000}
+export BRACKET_STOPS=${BRACKET_STOPS--3 -6 -9 -12}
 rm -rf "$out"
 mkdir -p "$out"
 work=$(mktemp -d)
@@ -86,7 +90,7 @@ plot "$out/resources.csv" using 1:(\$3/1024) with lines lw 2 title "VmRSS (MiB)"
 GP
 
 python3 - "$out" <<'PY'
-import csv, json, sys
+import csv, json, os, sys
 out = sys.argv[1]
 rows = list(csv.DictReader(open(f"{out}/resources.csv")))
 report = json.load(open(f"{out}/run/report.json"))
@@ -97,8 +101,10 @@ last = rows[-1]
 counters = report.get("counters", {})
 camera = report.get("camera", {})
 print(f"soak: {report['frames']} frames in {report['elapsed_s']:.0f} s ({report['fps']:.1f} fps), "
-      f"{counters.get('calibrations_completed', 0)} recalibrations, {camera.get('losses', 0)} camera losses, "
-      f"{camera.get('reconnects', 0)} reconnects")
+      f"{counters.get('calibrations_completed', 0)} recalibrations, {counters.get('brackets_merged', 0)} brackets "
+      f"merged, {camera.get('losses', 0)} camera losses, {camera.get('reconnects', 0)} reconnects")
+if os.environ.get("BRACKET_STOPS", "").strip() and counters.get("brackets_merged", 0) == 0:
+    sys.exit("soak: no bracket was merged although the replay has exposure sets")
 failed = False
 for column, name in (("rss_kib", "RSS (KiB)"), ("open_fds", "open file descriptors"), ("gl_objects", "live GL objects")):
     before, after = int(settled[column]), int(last[column])

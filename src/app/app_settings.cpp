@@ -216,6 +216,7 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.min_exposure_us =
       sim.readDouble("min_exposure_us", settings.sim.min_exposure_us, Range::closed(0.0, 1e6));
   settings.sim.min_exposure_reported = sim.readBool("min_exposure_reported", settings.sim.min_exposure_reported);
+  settings.sim.exposure_stops = sim.readDouble("exposure_stops", settings.sim.exposure_stops, Range::closed(-16.0, 16.0));
   settings.sim.camera_buffers = sim.readInt("camera_buffers", settings.sim.camera_buffers, Range::closed(2, 16));
   sim.rejectUnknownFields();
 

@@ -41,6 +41,11 @@ struct SimConfig {
   // ExposureTime control has a minimum; a source may not tell it), so that
   // a bracket plans its ladder to it rather than finding it.
   bool min_exposure_reported = true;
+  // The simulated sensor's own exposure, in stops from the scene's (its
+  // auto exposure): every frame not in a bracket is taken at 10 ms x
+  // 2^exposure_stops. scripts/replay-frames.sh renders a bracket's
+  // exposures this way for a replay to serve (ImageFrameSource's exposure sets).
+  double exposure_stops = 0.0;
   // Buffers in the simulated camera's pool: an exposure change reaches the
   // frames from this many after the newest one handed out (its latency, as
   // a real pipeline's queued requests give one).

@@ -367,6 +367,7 @@ class Kiosk {
     camera_options.failed_restarts = settings.sim.camera_lost_restarts;
     camera_options.min_exposure_us = settings.sim.min_exposure_us;
     camera_options.min_exposure_reported = settings.sim.min_exposure_reported;
+    camera_options.exposure_stops = settings.sim.exposure_stops;
     source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), settings.sim.camera_buffers, camera_options);
     return Status::ok();
   }

@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <optional>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
@@ -38,10 +41,50 @@ std::vector<std::string> globRegularFiles(const std::string& pattern) {
   return files;
 }
 
+// "ev-2" -> -2, "ev+1.5" -> 1.5; nullopt for any other name.
+std::optional<double> exposureSetStops(const std::string& name) {
+  if (name.size() < 3 || name.compare(0, 2, "ev") != 0) return std::nullopt;
+  const char* begin = name.c_str() + 2;
+  char* end = nullptr;
+  const double stops = std::strtod(begin, &end);
+  if (end == begin || *end != '\0' || !std::isfinite(stops) || std::abs(stops) > 16.0) return std::nullopt;
+  return stops;
+}
+
 }  // namespace
 
 ImageFrameSource::ImageFrameSource(std::string folder_or_pattern, bool loop, int pool_size)
-    : ThreadedFrameSource(pool_size), folder_or_pattern_(std::move(folder_or_pattern)), loop_(loop) {}
+    : ThreadedFrameSource(pool_size),
+      folder_or_pattern_(std::move(folder_or_pattern)),
+      loop_(loop),
+      exposure_schedule_(pool_size) {}
+
+std::vector<std::pair<double, std::string>> ImageFrameSource::exposureSets() const {
+  std::lock_guard<std::mutex> lock(exposure_mutex_);
+  return exposure_sets_;
+}
+
+bool ImageFrameSource::lockExposure(bool locked) {
+  (void)locked;  // a replay's exposure does not drift: locked already
+  std::lock_guard<std::mutex> lock(exposure_mutex_);
+  return !exposure_sets_.empty();
+}
+
+bool ImageFrameSource::setExposureLadder(const std::vector<ManualExposure>& per_frame) {
+  std::lock_guard<std::mutex> lock(exposure_mutex_);
+  if (exposure_sets_.empty()) return false;
+  exposure_schedule_.request(per_frame);
+  return true;
+}
+
+FrameWait ImageFrameSource::waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) {
+  const FrameWait wait = ThreadedFrameSource::waitFrame(timeout, lease);
+  if (wait == FrameWait::kFrame) {
+    std::lock_guard<std::mutex> lock(exposure_mutex_);
+    exposure_schedule_.handedOut(lease->metadata.sequence);
+  }
+  return wait;
+}
 
 ImageFrameSource::~ImageFrameSource() {
   // The base destructor would join the thread only after this object's
@@ -52,11 +95,15 @@ ImageFrameSource::~ImageFrameSource() {
 bool ImageFrameSource::prepare(std::string& error) {
   files_.clear();
   next_file_ = 0;
+  std::vector<std::pair<double, std::string>> sets;
   std::error_code status;
   if (std::filesystem::is_directory(folder_or_pattern_, status)) {
     for (const auto& entry : std::filesystem::directory_iterator(folder_or_pattern_, status)) {
       std::error_code ignored;
       if (entry.is_regular_file(ignored) && hasImageExtension(entry.path())) files_.push_back(entry.path().string());
+      if (entry.is_directory(ignored))
+        if (const auto stops = exposureSetStops(entry.path().filename().string()))
+          sets.emplace_back(*stops, entry.path().string());
     }
     if (status) {
       error = "image source: cannot list folder '" + folder_or_pattern_ + "': " + status.message();
@@ -74,6 +121,10 @@ bool ImageFrameSource::prepare(std::string& error) {
     }
   }
   std::sort(files_.begin(), files_.end());
+  std::sort(sets.begin(), sets.end());
+  std::lock_guard<std::mutex> lock(exposure_mutex_);
+  exposure_sets_ = std::move(sets);
+  exposure_schedule_.clear();  // a restarted replay numbers its frames from 0 again
   return true;
 }
 
@@ -86,9 +137,33 @@ ThreadedFrameSource::Produced ImageFrameSource::produce(std::uint64_t index, Fra
       if (!loop_) break;
       next_file_ = 0;
     }
-    const std::string& path = files_[next_file_++];
+    const std::string& own_path = files_[next_file_++];
+    // With exposure sets: the set nearest the exposure this frame is to be
+    // taken at (its own files are stops 0).
+    std::string path = own_path;
+    double stops = 0.0;
+    bool has_sets = false;
+    {
+      std::lock_guard<std::mutex> lock(exposure_mutex_);
+      has_sets = !exposure_sets_.empty();
+      if (const auto asked = exposure_schedule_.at(index)) {
+        const double asked_stops = std::log2(asked->exposure_us * asked->analogue_gain / kReplayExposureUs);
+        for (const auto& [set_stops, folder] : exposure_sets_)
+          if (std::abs(set_stops - asked_stops) < std::abs(stops - asked_stops)) {
+            stops = set_stops;
+            path = (std::filesystem::path(folder) / std::filesystem::path(own_path).filename()).string();
+          }
+      }
+    }
     std::string why;
     cv::Mat bgr = readImageFile(path, cv::IMREAD_COLOR, &why);
+    if (bgr.empty() && path != own_path) {
+      std::cerr << "probelight: warning: exposure set file '" << path << "': " << why << "; using '" << own_path
+                << "' (stops 0)\n";
+      path = own_path;
+      stops = 0.0;
+      bgr = readImageFile(path, cv::IMREAD_COLOR, &why);
+    }
     if (bgr.empty()) {
       std::cerr << "probelight: warning: skipping '" << path << "': " << why << "\n";
       continue;
@@ -96,6 +171,10 @@ ThreadedFrameSource::Produced ImageFrameSource::produce(std::uint64_t index, Fra
     rgbFromBgr(bgr, buffer.rgb);
     buffer.finishRgb();
     buffer.metadata = FrameMetadata{};
+    if (has_sets) {
+      buffer.metadata.exposure_us = kReplayExposureUs * std::exp2(stops);
+      buffer.metadata.analogue_gain = 1.0;
+    }
     buffer.metadata.sequence = index;
     buffer.metadata.timestamp_ns =
         std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();

@@ -1,10 +1,22 @@
 // Frames from image files on disk: a folder or a glob(3) pattern, in name
 // order. For replaying recorded sessions and for tests on real photos.
+//
+// Exposure sets (a replayed camera with exposure control): when the folder
+// holds subfolders named ev<stops> (ev-2, ev-4, ev+1.5) with files named as
+// its own, the folder's files count as taken at kReplayExposureUs (stops 0)
+// and each set's at that times 2^stops. The source then has exposure
+// control: a ladder (setExposureLadder) gets, frame by frame, the file of
+// the set nearest the exposure asked for, and the frame's metadata says
+// which exposure it got (as a sensor that clamps a request does).
+// scripts/replay-frames.sh makes such sets with the simulator.
 #pragma once
 
+#include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "capture/exposure_schedule.hpp"
 #include "capture/frame_source.hpp"
 
 namespace probelight {
@@ -18,9 +30,20 @@ class ImageFrameSource : public ThreadedFrameSource {
   explicit ImageFrameSource(std::string folder_or_pattern, bool loop = false, int pool_size = 3);
   ~ImageFrameSource() override;
 
+  // The exposure of a replay's own files when it has exposure sets: the
+  // simulated camera's (SimFrameSource), which renders the sets.
+  static constexpr double kReplayExposureUs = 10000.0;
+
   std::string name() const override { return "images:" + folder_or_pattern_; }
   // The files found by the last start() (valid after a successful start).
   const std::vector<std::string>& files() const { return files_; }
+  // The exposure sets found by the last start(): (stops, folder), by stops.
+  std::vector<std::pair<double, std::string>> exposureSets() const;
+
+  // Exposure control, where the replay has exposure sets (false otherwise).
+  bool lockExposure(bool locked) override;
+  bool setExposureLadder(const std::vector<ManualExposure>& per_frame) override;
+  FrameWait waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) override;
 
  protected:
   // Lists the files; fails with one line when none match.
@@ -36,6 +59,9 @@ class ImageFrameSource : public ThreadedFrameSource {
   std::vector<std::string> files_;
   std::size_t next_file_ = 0;
   std::uint64_t frames_delivered_ = 0;  // a replay that decodes nothing is an error, not an empty run
+  mutable std::mutex exposure_mutex_;    // the sets and the schedule: the consumer's thread and the producer's
+  std::vector<std::pair<double, std::string>> exposure_sets_;
+  ExposureSchedule exposure_schedule_;
 };
 
 }  // namespace probelight

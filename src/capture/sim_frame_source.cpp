@@ -30,7 +30,7 @@ SimFrameSource::SimFrameSource(std::shared_ptr<const sim::World> world, std::uin
       world_(std::move(world)),
       frame_count_(frame_count),
       options_(options),
-      pool_size_(pool_size) {}
+      exposure_schedule_(pool_size) {}
 
 bool SimFrameSource::lockExposure(bool locked) {
   (void)locked;
@@ -39,23 +39,7 @@ bool SimFrameSource::lockExposure(bool locked) {
 
 bool SimFrameSource::setExposureLadder(const std::vector<ManualExposure>& per_frame) {
   std::lock_guard<std::mutex> lock(exposure_mutex_);
-  // The consumer holds the newest frame; the pool's other buffers may hold
-  // the next ones already made. From newest + pool size on, none is: the
-  // ladder starts there, and replaces what was to come from there on.
-  const std::uint64_t first = newest_handed_out_ + static_cast<std::uint64_t>(pool_size_);
-  while (!exposure_changes_.empty() && exposure_changes_.back().first >= first) exposure_changes_.pop_back();
-  // Of the changes every frame still to come is past, only the newest is
-  // needed (an endless run recalibrates again and again).
-  std::size_t first_needed = 0;
-  for (std::size_t i = 0; i < exposure_changes_.size(); ++i)
-    if (exposure_changes_[i].first <= newest_handed_out_) first_needed = i;
-  exposure_changes_.erase(exposure_changes_.begin(),
-                          exposure_changes_.begin() + static_cast<std::ptrdiff_t>(first_needed));
-  if (per_frame.empty()) {
-    exposure_changes_.emplace_back(first, std::nullopt);
-    return true;
-  }
-  for (std::size_t i = 0; i < per_frame.size(); ++i) exposure_changes_.emplace_back(first + i, per_frame[i]);
+  exposure_schedule_.request(per_frame);
   return true;
 }
 
@@ -68,7 +52,7 @@ FrameWait SimFrameSource::waitFrame(std::chrono::milliseconds timeout, FrameLeas
   const FrameWait wait = ThreadedFrameSource::waitFrame(timeout, lease);
   if (wait == FrameWait::kFrame) {
     std::lock_guard<std::mutex> lock(exposure_mutex_);
-    newest_handed_out_ = lease->metadata.sequence;
+    exposure_schedule_.handedOut(lease->metadata.sequence);
   }
   return wait;
 }
@@ -99,14 +83,13 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
     error = "camera: sim camera disconnected";
     return Produced::kError;
   }
-  // The sensor's own exposure: 10 ms at gain 1 (the scene's exposure).
+  // The sensor's own exposure: 10 ms at gain 1 (the scene's exposure),
+  // shifted by exposure_stops.
   constexpr double kSimExposureUs = 10000.0;
-  ManualExposure exposure{kSimExposureUs, 1.0};
+  ManualExposure exposure{kSimExposureUs * std::exp2(options_.exposure_stops), 1.0};
   {
     std::lock_guard<std::mutex> lock(exposure_mutex_);
-    // The newest change that applies to this frame.
-    for (const auto& [from_index, change] : exposure_changes_)
-      if (from_index <= index) exposure = change ? *change : ManualExposure{kSimExposureUs, 1.0};
+    if (const auto scheduled = exposure_schedule_.at(index)) exposure = *scheduled;
   }
   exposure.exposure_us = std::max(exposure.exposure_us, options_.min_exposure_us);
   const double exposure_ev = std::log2(exposure.exposure_us * exposure.analogue_gain / kSimExposureUs);

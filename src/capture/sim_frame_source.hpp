@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "capture/exposure_schedule.hpp"
 #include "capture/frame_source.hpp"
 #include "sim/world.hpp"
 
@@ -32,6 +33,8 @@ struct SimCameraOptions {
   // Whether shortestExposureUs() says it (real sources may not know).
   bool min_exposure_reported = true;
   int failed_restarts = 0;
+  // The sensor's own exposure outside a bracket, in stops from the scene's.
+  double exposure_stops = 0.0;
 };
 
 class SimFrameSource : public ThreadedFrameSource {
@@ -73,11 +76,7 @@ class SimFrameSource : public ThreadedFrameSource {
   int restarts_failed_ = 0;
   ImageRGB8 rendered_;      // YUV layouts: the picture before encoding
   std::mutex exposure_mutex_;  // set on the render thread, read on the producer's
-  // Exposure changes: from which frame index each applies (increasing;
-  // nullopt: the sensor's own exposure again).
-  std::vector<std::pair<std::uint64_t, std::optional<ManualExposure>>> exposure_changes_;
-  std::uint64_t newest_handed_out_ = 0;
-  int pool_size_ = 3;
+  ExposureSchedule exposure_schedule_;
 };
 
 }  // namespace probelight

@@ -173,6 +173,7 @@ TEST(AppSettings, MapUpdateFieldsAreRangeChecked) {
   expectRejected("faults:\n  camera_loss_failed_restarts: 1001\n", "faults.camera_loss_failed_restarts");
   expectRejected("faults:\n  camera_loss_every: 10\n", "camera_loss_every");
   expectRejected("output:\n  resources_every_frames: -5\n", "output.resources_every_frames");
+  expectRejected("sim:\n  exposure_stops: 17\n", "sim.exposure_stops");
   // Worker threads libapriltag does not survive (its pool races before 3.4.3).
   const int too_many_threads = tracking::maxDetectorThreads() + 1;
   if (too_many_threads <= 16)

@@ -1,5 +1,8 @@
 // ImageFrameSource: files in name order, undecodable ones skipped, end of stream.
+#include <filesystem>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -72,6 +75,55 @@ TEST(ImageFrameSource, DeliversFilesInNameOrderSkippingUndecodableOnes) {
   // One warning line naming the broken file.
   EXPECT_NE(warnings.find("frame_1x_corrupt.png"), std::string::npos) << warnings;
   EXPECT_EQ(std::count(warnings.begin(), warnings.end(), '\n'), 1) << warnings;
+}
+
+// Exposure sets: ev<stops> subfolders make the replay a camera with exposure
+// control. A ladder asked while frame 0 is held reaches frame 3 on (the pool
+// of 3 has frames 1 and 2 made), each frame from the set nearest its
+// exposure, and the metadata says the exposure it got.
+TEST(ImageFrameSource, ExposureSetsServeALadderFromTheNearestSet) {
+  TempFolder folder;
+  std::filesystem::create_directories(folder.path() / "ev-2");
+  std::filesystem::create_directories(folder.path() / "ev-4");
+  std::filesystem::create_directories(folder.path() / "evening");  // not a set: ignored
+  for (int i = 0; i < 8; ++i) {
+    const std::string name = "f_" + std::to_string(i) + ".png";
+    writeSolidPng(folder.file(name), 8, 8, {200, 200, 200});
+    writeSolidPng((folder.path() / "ev-2" / name).string(), 8, 8, {50, 50, 50});
+    writeSolidPng((folder.path() / "ev-4" / name).string(), 8, 8, {12, 12, 12});
+  }
+  ImageFrameSource source(folder.path().string(), /*loop=*/false, /*pool_size=*/3);
+  std::string error;
+  ASSERT_TRUE(source.start(error)) << error;
+  ASSERT_EQ(source.exposureSets().size(), 2u);
+  EXPECT_EQ(source.exposureSets()[0].first, -4.0);
+  EXPECT_TRUE(source.lockExposure(true));
+  std::vector<std::pair<int, double>> got;  // (first pixel, exposure_us) per frame
+  for (int i = 0; i < 8; ++i) {
+    FrameLease lease;
+    ASSERT_EQ(source.waitFrame(2000ms, lease), FrameWait::kFrame);
+    got.emplace_back(lease->rgb.pixels[0], lease->metadata.exposure_us);
+    // 2400 us is 2.06 stops under 10 ms (nearest set: ev-2), 700 us 3.8 (ev-4).
+    if (i == 0) ASSERT_TRUE(source.setExposureLadder({{2400.0, 1.0}, {700.0, 1.0}}));
+  }
+  const double base = ImageFrameSource::kReplayExposureUs;
+  const std::vector<std::pair<int, double>> want = {{200, base},       {200, base},       {200, base},
+                                                    {50, base / 4.0},  {12, base / 16.0}, {12, base / 16.0},
+                                                    {12, base / 16.0}, {12, base / 16.0}};
+  EXPECT_EQ(got, want);
+}
+
+TEST(ImageFrameSource, WithoutExposureSetsThereIsNoExposureControl) {
+  TempFolder folder;
+  writeSolidPng(folder.file("a.png"), 8, 8, {1, 2, 3});
+  ImageFrameSource source(folder.path().string());
+  std::string error;
+  ASSERT_TRUE(source.start(error)) << error;
+  EXPECT_FALSE(source.lockExposure(true));
+  EXPECT_FALSE(source.setExposureLadder({{1000.0, 1.0}}));
+  FrameLease lease;
+  ASSERT_EQ(source.waitFrame(2000ms, lease), FrameWait::kFrame);
+  EXPECT_EQ(lease->metadata.exposure_us, 0.0);  // unknown
 }
 
 TEST(ImageFrameSource, GlobPatternAndLooping) {
