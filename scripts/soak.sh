@@ -19,7 +19,10 @@
 # file descriptors and the GL objects the driver holds for it (glIs* over
 # every name it was given). After the first 1,000 frames (start-up, the first
 # fit, the caches filling) none may grow by more than 1%; the script exits 1
-# when one does.
+# when one does. The heap the program holds (mallinfo2's bytes in use) is
+# plotted and printed beside it, to tell a leak (it grows with RSS) from the
+# allocator keeping freed pages (only RSS grows); the last sample's includes
+# the final frame's PNG on its way to disk.
 #
 # Writes OUT/resources.csv, OUT/soak.png (gnuplot: the three against frames)
 # and OUT/run/report.json. Needs gnuplot (Debian's gnuplot-nox). Not part of
@@ -85,6 +88,7 @@ set ytics nomirror
 set yrange [0:*]
 set y2range [0:*]
 plot "$out/resources.csv" using 1:(\$3/1024) with lines lw 2 title "VmRSS (MiB)", \
+     "" using 1:(\$13/1024) with lines lw 2 title "heap in use (MiB)", \
      "" using 1:4 axes x1y2 with lines lw 2 title "open fds", \
      "" using 1:5 axes x1y2 with lines lw 2 title "live GL objects"
 GP
@@ -113,6 +117,10 @@ for column, name in (("rss_kib", "RSS (KiB)"), ("open_fds", "open file descripto
     print(f"soak: {name} {before} at frame {settled['frames']} -> {after} at frame {last['frames']} "
           f"({100 * growth:+.2f}%), peak {peak}")
     failed = failed or growth > 0.01
+if "heap_in_use_kib" in settled:
+    before, late = int(settled["heap_in_use_kib"]), int(rows[-2]["heap_in_use_kib"])
+    print(f"soak: heap in use (KiB) {before} at frame {settled['frames']} -> {late} at frame {rows[-2]['frames']} "
+          f"({100 * (late - before) / before:+.2f}%; not a limit: RSS is)")
 if failed:
     sys.exit(f"soak: grew by more than 1% after the first 1,000 frames (plot: {out}/soak.png)")
 PY

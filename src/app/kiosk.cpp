@@ -11,6 +11,7 @@
 
 #include "app/app_settings.hpp"
 #include "app/camera_link.hpp"
+#include "app/heap_release.hpp"
 #include "app/resource_log.hpp"
 #include "app/service_notify.hpp"
 #include "app/shutdown_request.hpp"
@@ -131,11 +132,20 @@ class Kiosk {
       FrameContext ctx(*lease, frames_done_++);
       ctx.frames_since_camera_start = camera_->framesSinceStart();
       PROBELIGHT_TRY(processFrame(ctx));
+      if (heap_release_.releaseAfter(heavyEventsSoFar()) && releaseFreeHeapToSystem())
+        report_.count("heap_releases");
       if (resources_.due(frames_done_))
         resources_.write(frames_done_, monotonicNowS() - loop_start_s_, readProcessResources(),
                          gles::countLiveGlObjects());
     }
     return Status::ok();
+  }
+
+  // The events whose temporaries dwarf a frame's (heap_release.hpp).
+  long long heavyEventsSoFar() const {
+    return report_.counter("calibrations_completed") + report_.counter("calibrations_failed") +
+           report_.counter("button_long_presses_restored") + report_.counter("refits_for_light_change") +
+           report_.counter("camera_reconnects");
   }
 
   Status processFrame(FrameContext& ctx) {
@@ -493,6 +503,7 @@ class Kiosk {
   std::uint64_t frames_done_ = 0;
   double loop_start_s_ = 0.0;  // the frame loop's start (monotonicNowS): report.json's elapsed_s, resources.csv's
   ResourceLog resources_{0};  // output.resources_every_frames (setUp)
+  HeapReleasePolicy heap_release_;
   tracking::TagTrackResult last_track_;  // redrawn over the last frame while it is kept
   std::uint64_t last_frame_number_ = 0;
   ImageRGB8 last_pipeline_frame_;  // --capture only

@@ -1,6 +1,9 @@
 #include "app/resource_log.hpp"
 
 #include <filesystem>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <sstream>
 #include <system_error>
 
@@ -14,9 +17,17 @@ ProcessResources readProcessResources() {
       std::istringstream fields(line.substr(6));
       long long kib = -1;
       if (fields >> kib) resources.rss_kib = kib;
-      break;
+    } else if (line.rfind("Threads:", 0) == 0) {
+      std::istringstream fields(line.substr(8));
+      int threads = -1;
+      if (fields >> threads) resources.threads = threads;
     }
   }
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+  const struct mallinfo2 heap = mallinfo2();
+  resources.heap_in_use_kib = static_cast<long long>((heap.uordblks + heap.hblkhd) / 1024);
+  resources.heap_held_kib = static_cast<long long>((heap.arena + heap.hblkhd) / 1024);
+#endif
   std::error_code error;
   int count = 0;
   for (std::filesystem::directory_iterator it("/proc/self/fd", error), end; !error && it != end; it.increment(error))
@@ -34,7 +45,7 @@ bool ResourceLog::open(const std::string& path, std::string& error) {
     return false;
   }
   out_ << "frames,elapsed_s,rss_kib,open_fds,gl_objects,gl_textures,gl_framebuffers,gl_renderbuffers,gl_buffers,"
-          "gl_programs,gl_shaders\n";
+          "gl_programs,gl_shaders,threads,heap_in_use_kib,heap_held_kib\n";
   out_.flush();
   return true;
 }
@@ -48,7 +59,8 @@ void ResourceLog::write(std::uint64_t frames_done, double elapsed_s, const Proce
                         const gles::GlObjectCounts& gl) {
   out_ << frames_done << ',' << elapsed_s << ',' << process.rss_kib << ',' << process.open_fds << ',' << gl.total()
        << ',' << gl.textures << ',' << gl.framebuffers << ',' << gl.renderbuffers << ',' << gl.buffers << ','
-       << gl.programs << ',' << gl.shaders << '\n';
+       << gl.programs << ',' << gl.shaders << ',' << process.threads << ',' << process.heap_in_use_kib << ','
+       << process.heap_held_kib << '\n';
   // Flushed: a soak reads it while the run goes on, and a killed run keeps it.
   out_.flush();
 }

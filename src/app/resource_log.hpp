@@ -1,8 +1,12 @@
 // What a long run holds, sampled every N frames into a CSV, so that a leak
-// shows as a column that grows: the process's resident memory and open file
-// descriptors (from /proc/self) and the GL objects the driver holds for it
-// (gles::countLiveGlObjects). probelight.yaml's output.resources_every_frames;
-// scripts/soak.sh reads the file.
+// shows as a column that grows: the process's resident memory, threads and
+// open file descriptors (from /proc/self), the heap as the allocator sees it
+// (glibc's mallinfo2: what the program holds, and what the allocator keeps
+// from the system for it), and the GL objects the driver holds for it
+// (gles::countLiveGlObjects). The two heap figures tell a leak (in use
+// grows) from allocator retention (only the held figure grows).
+// probelight.yaml's output.resources_every_frames; scripts/soak.sh reads the
+// file.
 #pragma once
 
 #include <cstdint>
@@ -16,6 +20,12 @@ namespace probelight {
 struct ProcessResources {
   long long rss_kib = -1;  // VmRSS; -1 where /proc/self/status cannot be read
   int open_fds = -1;       // entries of /proc/self/fd; -1 where it cannot be listed
+  int threads = -1;        // Threads: of /proc/self/status
+  // mallinfo2, over all arenas: the bytes malloc has handed out and not had
+  // back (uordblks + hblkhd), and the bytes it holds from the system for the
+  // heap (arena + hblkhd); -1 without glibc.
+  long long heap_in_use_kib = -1;
+  long long heap_held_kib = -1;
 };
 ProcessResources readProcessResources();
 

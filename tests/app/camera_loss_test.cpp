@@ -163,11 +163,14 @@ TEST_F(CameraRun, InjectedLossesReconnectAndTheResourcesAreLogged) {
   }
   ASSERT_EQ(rows.size(), static_cast<std::size_t>(1 + frames / 10));  // frames 1, 10, 20 (and 30)
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    ASSERT_EQ(rows[i].size(), 11u);
+    ASSERT_EQ(rows[i].size(), 14u);
     EXPECT_EQ(rows[i][0], i == 0 ? 1 : static_cast<long long>(10 * i));
     EXPECT_GT(rows[i][2], 10000) << "RSS in KiB";
     EXPECT_GE(rows[i][3], 3) << "at least stdin, stdout and stderr";
     EXPECT_GT(rows[i][4], 0) << "live GL objects";
+    EXPECT_GE(rows[i][11], 2) << "threads: at least the render thread and the camera's";
+    EXPECT_GT(rows[i][12], 0) << "heap in use (KiB)";
+    EXPECT_GE(rows[i][13], rows[i][12]) << "the allocator holds at least what it has handed out";
   }
   // Across the losses nothing more is held: the same GL objects and
   // descriptors at frame 20 (and 30) as at frame 10.
