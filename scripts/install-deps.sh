@@ -8,16 +8,17 @@ packages=(
   build-essential cmake pkg-config
   # vision: marker detection, calibration, image files (libdeflate: the fast PNG writer for frames)
   libapriltag-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev libdeflate-dev
-  # maths and data
-  libglm-dev nlohmann-json3-dev
+  # maths and data; glTF 2.0 models (tinygltf)
+  libglm-dev nlohmann-json3-dev libtinygltf-dev
   # the command line's parser (header-only)
   libcli11-dev
   # GLES2 through EGL; Mesa's llvmpipe renders headless on machines without a GPU
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
   # board backends (camera, KMS display, GPIO button, the systemd service's notifications)
   libcamera-dev libgbm-dev libdrm-dev libgpiod-dev libsystemd-dev
-  # tests and benchmarks (systemd-analyze checks the unit file)
-  libgtest-dev libbenchmark-dev systemd
+  # tests and benchmarks (systemd-analyze checks the unit file; assimp-testmodels:
+  # the assimp project's glTF 2.0 files, valid and broken, read where Debian puts them)
+  libgtest-dev libbenchmark-dev systemd assimp-testmodels
   # the sanitizer build and the libFuzzer targets (scripts/test-sanitizers.sh)
   clang libclang-rt-14-dev
 )
