@@ -9,6 +9,7 @@
 #include <new>
 #include <set>
 #include <sstream>
+#include <utility>
 
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -207,8 +208,8 @@ struct AccessorData {
 
 class Converter {
  public:
-  Converter(const tinygltf::Model& gltf, const ModelLimits& limits, MeshModel& out)
-      : gltf_(gltf), limits_(limits), out_(out) {}
+  Converter(const tinygltf::Model& gltf, const ModelLimits& limits, std::string tinygltf_warning, MeshModel& out)
+      : gltf_(gltf), limits_(limits), tinygltf_warning_(std::move(tinygltf_warning)), out_(out) {}
 
   // "" or "field: problem".
   std::string run();
@@ -233,6 +234,7 @@ class Converter {
 
   const tinygltf::Model& gltf_;
   ModelLimits limits_;
+  std::string tinygltf_warning_;
   MeshModel& out_;
   std::uint64_t bytes_ = 0;
   std::set<std::string> warned_;
@@ -266,19 +268,22 @@ std::string Converter::accessor(int index, const std::string& field, std::initia
     return where + ": its bufferView's buffer " + std::to_string(view.buffer) + ", but the file has " +
            std::to_string(gltf_.buffers.size());
   const tinygltf::Buffer& buffer = gltf_.buffers[static_cast<std::size_t>(view.buffer)];
+  // In this order, so that no product below can overflow: the view inside
+  // its buffer (which is in memory, so at most a file's size), then every
+  // count and offset inside the view.
+  if (view.byteOffset > buffer.data.size() || view.byteLength > buffer.data.size() - view.byteOffset)
+    return where + ": its bufferView (" + std::to_string(view.byteLength) + " bytes from byte " +
+           std::to_string(view.byteOffset) + ") runs past its buffer's " + std::to_string(buffer.data.size()) + " bytes";
   const std::uint64_t element_bytes = static_cast<std::uint64_t>(componentCount(a.type)) * componentBytes(a.componentType);
   const std::uint64_t stride = view.byteStride != 0 ? view.byteStride : element_bytes;
-  if (stride < element_bytes)
+  if (stride < element_bytes || stride > 252)
     return where + ": a byteStride of " + std::to_string(stride) + " for elements of " + std::to_string(element_bytes) +
-           " bytes";
+           " bytes (the spec allows up to 252)";
   if (a.count == 0) return where + ": no elements";
-  const std::uint64_t needed = static_cast<std::uint64_t>(a.byteOffset) + stride * (a.count - 1) + element_bytes;
-  if (needed > view.byteLength)
-    return where + ": " + std::to_string(a.count) + " elements from byte " + std::to_string(a.byteOffset) +
-           " need " + std::to_string(needed) + " bytes, but its bufferView has " + std::to_string(view.byteLength);
-  if (static_cast<std::uint64_t>(view.byteOffset) + view.byteLength > buffer.data.size())
-    return where + ": its bufferView ends at byte " + std::to_string(view.byteOffset + view.byteLength) +
-           ", but its buffer has " + std::to_string(buffer.data.size());
+  if (a.count > view.byteLength || a.byteOffset > view.byteLength ||
+      static_cast<std::uint64_t>(a.byteOffset) + stride * (a.count - 1) + element_bytes > view.byteLength)
+    return where + ": " + std::to_string(a.count) + " elements of " + std::to_string(element_bytes) + " bytes from byte " +
+           std::to_string(a.byteOffset) + " do not fit in its bufferView's " + std::to_string(view.byteLength) + " bytes";
   data.bytes = buffer.data.data() + view.byteOffset + a.byteOffset;
   data.count = a.count;
   data.stride = static_cast<std::size_t>(stride);
@@ -741,8 +746,18 @@ std::string Converter::run() {
     for (const std::string& extension : ignored) line += " " + extension;
     out_.warnings.push_back(line);
   }
-  for (const tinygltf::Image& image : gltf_.images)
+  for (std::size_t i = 0; i < gltf_.images.size(); ++i) {
+    const tinygltf::Image& image = gltf_.images[i];
+    // tinygltf leaves an image it could not find (a missing file, a uri it
+    // does not take for a data URI) empty, with only a warning.
+    if (image.image.empty() || image.width <= 0 || image.height <= 0) {
+      std::string uri = image.uri.substr(0, 48);
+      if (uri.size() < image.uri.size()) uri += "...";
+      return "images[" + std::to_string(i) + "]" + (uri.empty() ? "" : " (\"" + uri + "\")") + ": could not be read" +
+             (tinygltf_warning_.empty() ? "" : " (" + firstLine(tinygltf_warning_) + ")");
+    }
     if (std::string problem = charge(image.image.size(), "images"); !problem.empty()) return problem;
+  }
   if (std::string problem = materials(); !problem.empty()) return problem;
   if (std::string problem = nodes(); !problem.empty()) return problem;
   for (std::size_t i = 0; i < gltf_.images.size(); ++i) {
@@ -825,7 +840,7 @@ bool loadGltfModel(const std::string& path, const ModelLimits& limits, MeshModel
   if (!loaded) return fail(gltf_error.empty() ? "tinygltf could not read it" : firstLine(gltf_error));
   if (!gltf_warning.empty()) model.warnings.push_back(firstLine(gltf_warning));
   try {
-    if (std::string problem = Converter(gltf, limits, model).run(); !problem.empty()) return fail(problem);
+    if (std::string problem = Converter(gltf, limits, gltf_warning, model).run(); !problem.empty()) return fail(problem);
   } catch (const std::bad_alloc&) {
     return fail("does not fit in memory");
   }

@@ -270,3 +270,44 @@ TEST_F(GltfLoader, TheLargestIndexTellsWhether16BitIndicesDo) {
 
 }  // namespace
 }  // namespace probelight::model
+
+namespace probelight::model {
+namespace {
+
+// tinygltf leaves an image it cannot find empty, with a warning only (found
+// by fuzz/gltf_model_fuzzer.cpp: a "data:image/png;base28," uri, taken for a
+// file name): the model is refused, naming the image, not shown untextured.
+TEST_F(GltfLoader, AnImageThatCannotBeReadIsRefused) {
+  for (const char* uri : {"missing.png", "data:image/png;base28,iVBORw0KGgo="}) {
+    json file = meshFile({0, 0, 0, 1, 0, 0, 0, 1, 0}, {}, json::array({{{"mesh", 0}}}));
+    file["images"] = {{{"uri", uri}}};
+    file["textures"] = {{{"source", 0}}};
+    file["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}};
+    file["meshes"][0]["primitives"][0]["material"] = 0;
+    MeshModel model;
+    std::string error;
+    EXPECT_FALSE(load(file, model, error)) << uri;
+    EXPECT_NE(error.find("images[0] (\"" + std::string(uri).substr(0, 20)), std::string::npos) << error;
+    EXPECT_NE(error.find("could not be read"), std::string::npos) << error;
+  }
+}
+
+}  // namespace
+}  // namespace probelight::model
+
+namespace probelight::model {
+namespace {
+
+// A count of 2^62 times a stride of 12 wraps a 64-bit size to a small one;
+// the accessor is measured against its view before any product is formed.
+TEST_F(GltfLoader, AnAccessorCountThatWouldWrapIsRefused) {
+  json file = meshFile({0, 0, 0, 1, 0, 0, 0, 1, 0}, {}, json::array({{{"mesh", 0}}}));
+  file["accessors"][0]["count"] = 4611686018427387904ull;
+  MeshModel model;
+  std::string error;
+  EXPECT_FALSE(load(file, model, error));
+  EXPECT_NE(error.find("accessors[0]"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace probelight::model
