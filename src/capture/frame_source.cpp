@@ -171,6 +171,7 @@ FrameWait ThreadedFrameSource::waitFrame(std::chrono::milliseconds timeout, Fram
     ready_.pop_front();
     lock.unlock();
     lease = FrameLease(buffer, [this](FrameBuffer* b) { giveBack(b); });
+    handedOut(*lease);
     return FrameWait::kFrame;
   }
   return failed_ ? FrameWait::kError : FrameWait::kEndOfStream;

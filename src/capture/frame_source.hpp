@@ -167,6 +167,9 @@ class ThreadedFrameSource : public FrameSource {
   // Fills `buffer` with frame number `index` (0-based). On kError, `error`
   // says why.
   virtual Produced produce(std::uint64_t index, FrameBuffer& buffer, std::string& error) = 0;
+  // Called on the consumer's thread as waitFrame hands `frame` out (sources
+  // with exposure control move their schedule on: ExposureSchedule).
+  virtual void handedOut(const FrameBuffer& frame) { (void)frame; }
 
  private:
   void run();

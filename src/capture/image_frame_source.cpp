@@ -77,13 +77,9 @@ bool ImageFrameSource::setExposureLadder(const std::vector<ManualExposure>& per_
   return true;
 }
 
-FrameWait ImageFrameSource::waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) {
-  const FrameWait wait = ThreadedFrameSource::waitFrame(timeout, lease);
-  if (wait == FrameWait::kFrame) {
-    std::lock_guard<std::mutex> lock(exposure_mutex_);
-    exposure_schedule_.handedOut(lease->metadata.sequence);
-  }
-  return wait;
+void ImageFrameSource::handedOut(const FrameBuffer& frame) {
+  std::lock_guard<std::mutex> lock(exposure_mutex_);
+  exposure_schedule_.handedOut(frame.metadata.sequence);
 }
 
 ImageFrameSource::~ImageFrameSource() {

@@ -43,7 +43,6 @@ class ImageFrameSource : public ThreadedFrameSource {
   // Exposure control, where the replay has exposure sets (false otherwise).
   bool lockExposure(bool locked) override;
   bool setExposureLadder(const std::vector<ManualExposure>& per_frame) override;
-  FrameWait waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) override;
 
  protected:
   // Lists the files; fails with one line when none match.
@@ -52,6 +51,8 @@ class ImageFrameSource : public ThreadedFrameSource {
   // frame index). Undecodable files are skipped with a one-line warning on
   // stderr; the stream goes on.
   Produced produce(std::uint64_t index, FrameBuffer& buffer, std::string& error) override;
+  // The exposure schedule moves on with the frames handed out.
+  void handedOut(const FrameBuffer& frame) override;
 
  private:
   std::string folder_or_pattern_;

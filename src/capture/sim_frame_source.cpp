@@ -48,13 +48,9 @@ std::optional<double> SimFrameSource::shortestExposureUs() const {
   return std::nullopt;
 }
 
-FrameWait SimFrameSource::waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) {
-  const FrameWait wait = ThreadedFrameSource::waitFrame(timeout, lease);
-  if (wait == FrameWait::kFrame) {
-    std::lock_guard<std::mutex> lock(exposure_mutex_);
-    exposure_schedule_.handedOut(lease->metadata.sequence);
-  }
-  return wait;
+void SimFrameSource::handedOut(const FrameBuffer& frame) {
+  std::lock_guard<std::mutex> lock(exposure_mutex_);
+  exposure_schedule_.handedOut(frame.metadata.sequence);
 }
 
 bool SimFrameSource::prepare(std::string& error) {

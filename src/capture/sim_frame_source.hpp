@@ -61,11 +61,12 @@ class SimFrameSource : public ThreadedFrameSource {
   // dropped), so every rung arrives in order.
   bool setExposureLadder(const std::vector<ManualExposure>& per_frame) override;
   std::optional<double> shortestExposureUs() const override;
-  FrameWait waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) override;
 
  protected:
   bool prepare(std::string& error) override;
   Produced produce(std::uint64_t index, FrameBuffer& buffer, std::string& error) override;
+  // The exposure schedule moves on with the frames handed out.
+  void handedOut(const FrameBuffer& frame) override;
 
  private:
   std::shared_ptr<const sim::World> world_;

@@ -104,7 +104,9 @@ TEST(ImageFrameSource, ExposureSetsServeALadderFromTheNearestSet) {
     ASSERT_EQ(source.waitFrame(2000ms, lease), FrameWait::kFrame);
     got.emplace_back(lease->rgb.pixels[0], lease->metadata.exposure_us);
     // 2400 us is 2.06 stops under 10 ms (nearest set: ev-2), 700 us 3.8 (ev-4).
-    if (i == 0) ASSERT_TRUE(source.setExposureLadder({{2400.0, 1.0}, {700.0, 1.0}}));
+    if (i == 0) {
+      ASSERT_TRUE(source.setExposureLadder({{2400.0, 1.0}, {700.0, 1.0}}));
+    }
   }
   const double base = ImageFrameSource::kReplayExposureUs;
   const std::vector<std::pair<int, double>> want = {{200, base},       {200, base},       {200, base},
