@@ -24,9 +24,14 @@ ProcessResources readProcessResources() {
     }
   }
 #if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+  // An empty glibc heap in a running program means another allocator
+  // serves malloc (a sanitizer's, or one preloaded): its figures are not
+  // glibc's to give, so they stay unknown.
   const struct mallinfo2 heap = mallinfo2();
-  resources.heap_in_use_kib = static_cast<long long>((heap.uordblks + heap.hblkhd) / 1024);
-  resources.heap_held_kib = static_cast<long long>((heap.arena + heap.hblkhd) / 1024);
+  if (heap.uordblks + heap.hblkhd > 0) {
+    resources.heap_in_use_kib = static_cast<long long>((heap.uordblks + heap.hblkhd) / 1024);
+    resources.heap_held_kib = static_cast<long long>((heap.arena + heap.hblkhd) / 1024);
+  }
 #endif
   std::error_code error;
   int count = 0;

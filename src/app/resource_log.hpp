@@ -23,7 +23,7 @@ struct ProcessResources {
   int threads = -1;        // Threads: of /proc/self/status
   // mallinfo2, over all arenas: the bytes malloc has handed out and not had
   // back (uordblks + hblkhd), and the bytes it holds from the system for the
-  // heap (arena + hblkhd); -1 without glibc.
+  // heap (arena + hblkhd); -1 without glibc's allocator (a sanitizer's).
   long long heap_in_use_kib = -1;
   long long heap_held_kib = -1;
 };

@@ -16,6 +16,17 @@
 
 #include <nlohmann/json.hpp>
 
+// Whether this build (the tests and the binary alike) runs under ASan,
+// whose allocator serves malloc instead of glibc's.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define PROBELIGHT_TEST_UNDER_ASAN 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define PROBELIGHT_TEST_UNDER_ASAN 1
+#endif
+
 namespace probelight::testing {
 
 struct CommandResult {

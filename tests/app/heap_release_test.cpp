@@ -8,14 +8,8 @@
 #include <string>
 #include <vector>
 
-#if defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define PROBELIGHT_TEST_UNDER_ASAN 1
-#endif
-#endif
-#if defined(__SANITIZE_ADDRESS__)
-#define PROBELIGHT_TEST_UNDER_ASAN 1
-#endif
+#include "binary_test_support.hpp"
+
 
 namespace probelight {
 namespace {
