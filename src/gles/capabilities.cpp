@@ -30,6 +30,8 @@ Capabilities probeCapabilities() {
   caps.egl_image_external = hasExtension(extensions, "GL_OES_EGL_image_external");
   caps.standard_derivatives = hasExtension(extensions, "GL_OES_standard_derivatives");
   caps.unpack_subimage = hasExtension(extensions, "GL_EXT_unpack_subimage");
+  caps.element_index_uint = hasExtension(extensions, "GL_OES_element_index_uint");
+  caps.texture_npot = hasExtension(extensions, "GL_OES_texture_npot");
   if (const EGLDisplay display = eglGetCurrentDisplay(); display != EGL_NO_DISPLAY)
     caps.egl_dmabuf_import = hasExtension(eglQueryString(display, EGL_EXTENSIONS), "EGL_EXT_image_dma_buf_import");
 
@@ -80,6 +82,8 @@ std::string Capabilities::summary() const {
   flag(egl_image_external, "egl_image_external");
   flag(standard_derivatives, "derivatives");
   flag(unpack_subimage, "unpack_subimage");
+  flag(element_index_uint, "index_uint");
+  flag(texture_npot, "npot");
   flag(egl_dmabuf_import, "dmabuf_import");
   text += canRenderHalfFloat() ? " | maps: half float" : " | maps: 8-bit";
   return text;

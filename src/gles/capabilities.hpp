@@ -17,6 +17,8 @@ struct Capabilities {
   bool egl_image_external = false;         // GL_OES_EGL_image_external
   bool standard_derivatives = false;       // GL_OES_standard_derivatives
   bool unpack_subimage = false;            // GL_EXT_unpack_subimage (GL_UNPACK_ROW_LENGTH)
+  bool element_index_uint = false;         // GL_OES_element_index_uint (32-bit indices)
+  bool texture_npot = false;               // GL_OES_texture_npot (mipmaps and REPEAT on any size)
   bool egl_dmabuf_import = false;          // EGL_EXT_image_dma_buf_import on the current display
   bool fragment_highp = false;             // highp float exists in fragment shaders
   int fragment_highp_mantissa_bits = 0;    // 23 for IEEE single; 0 when absent

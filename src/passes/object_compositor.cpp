@@ -1,5 +1,7 @@
 #include "passes/object_compositor.hpp"
 
+#include "passes/object_uniforms.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -162,45 +164,15 @@ const gles::Program* ObjectCompositor::prepareShading(ObjectShape shape, const C
   const gles::Program& program = *shading;
   const GpuCubeMap& diffuse = environment.diffuse();
   const GpuCubeMap& reflection = environment.reflection();
-  const glm::vec3 eye_w(pose.cameraCenterWorld());
-  const glm::mat3 rotation(pose.R_cam_from_world);
   program.use();
-  glUniformMatrix3fv(program.uniform("u_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
-  const glm::vec3 translation(pose.t_cam_from_world);
-  glUniform3fv(program.uniform("u_translation_cam_from_world"), 1, glm::value_ptr(translation));
-  glUniform3fv(program.uniform("u_eye_w"), 1, glm::value_ptr(eye_w));
-  glUniform4f(program.uniform("u_distortion"), static_cast<float>(camera.distortion[0]),
-              static_cast<float>(camera.distortion[1]), static_cast<float>(camera.distortion[2]),
-              static_cast<float>(camera.distortion[3]));
-  glUniform1f(program.uniform("u_distortion_k3"), static_cast<float>(camera.distortion[4]));
-  glUniform2f(program.uniform("u_focal_px"), static_cast<float>(camera.fx_px), static_cast<float>(camera.fy_px));
-  glUniform2f(program.uniform("u_principal_px"), static_cast<float>(camera.cx_px), static_cast<float>(camera.cy_px));
-  glUniform2f(program.uniform("u_image_size_px"), static_cast<float>(camera.width_px),
-              static_cast<float>(camera.height_px));
-  glUniform2f(program.uniform("u_depth_range_m"), static_cast<float>(settings_.near_m),
-              static_cast<float>(settings_.far_m));
-
-  glActiveTexture(GL_TEXTURE0);
-  glBindTexture(GL_TEXTURE_CUBE_MAP, diffuse.texture.id());
-  glUniform1i(program.uniform("u_diffuse_map"), 0);
-  glUniform1f(program.uniform("u_diffuse_face_size"), static_cast<float>(diffuse.face_size));
-  glUniform1f(program.uniform("u_diffuse_scale"), diffuse.linear_scale);
-  glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_CUBE_MAP, reflection.texture.id());
-  glUniform1i(program.uniform("u_reflection_map"), 1);
-  glUniform1f(program.uniform("u_reflection_face_size"), static_cast<float>(reflection.face_size));
-  glUniform1f(program.uniform("u_reflection_scale"), reflection.linear_scale);
+  setCameraProjectionUniforms(program, camera, pose, settings_.near_m, settings_.far_m);
+  bindCubeMapUniforms(program, "u_diffuse", diffuse, 0);
+  bindCubeMapUniforms(program, "u_reflection", reflection, 1);
   // Absent glossy levels' samplers get the diffuse map (a complete cube
   // map; the shader never reads them).
-  for (int level = 0; level < 2; ++level) {
-    const std::string name = "u_glossy" + std::to_string(level);
-    const GpuCubeMap& map = level < glossy_levels ? environment.glossy(level) : diffuse;
-    glActiveTexture(GL_TEXTURE2 + static_cast<GLenum>(level));
-    glBindTexture(GL_TEXTURE_CUBE_MAP, map.texture.id());
-    glUniform1i(program.uniform((name + "_map").c_str()), 2 + level);
-    glUniform1f(program.uniform((name + "_face_size").c_str()), static_cast<float>(map.face_size));
-    glUniform1f(program.uniform((name + "_scale").c_str()), map.linear_scale);
-  }
+  for (int level = 0; level < 2; ++level)
+    bindCubeMapUniforms(program, "u_glossy" + std::to_string(level),
+                        level < glossy_levels ? environment.glossy(level) : diffuse, 2 + level);
   glUniform1f(program.uniform("u_toward_upper_rung"), rungs.toward_upper);
   glActiveTexture(GL_TEXTURE0);
 

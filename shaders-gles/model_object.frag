@@ -1,0 +1,210 @@
+#version 100
+// A glTF metallic-roughness surface lit from the maps, as
+// ibl::shadeMetallicRoughness (src/ibl/metallic_roughness.hpp):
+//   c = occlusion [c_diff (1 - E_s) D(n) + E_s R(r, roughness)] + emissive,
+// then sRGB-encoded (clamped).
+//
+// Built per material (passes/model_renderer.cpp): each texture the material
+// has defines <SLOT>_TEXTURE and <SLOT>_UV (the varying of its TEXCOORD
+// set, v_uv0 or v_uv1: GLSL ES 1.00 has no token pasting), and the
+// specular rungs its roughness can reach are RUNG_FIRST..RUNG_LAST of the
+// ladder 0 mirror, 1..GLOSSY_LEVELS glossy, GLOSSY_LEVELS + 1 diffuse. Only
+// those rungs' cube maps are declared and read: on GPUs that run every side
+// of a branch (llvmpipe) an unread rung would still cost four cube reads.
+//
+// Precision: everything here is a colour, a unit vector or a roughness;
+// 16-bit mediump keeps them to 2^-11, under half an 8-bit step. Nothing
+// divides by a roughness: the ladder position divides only by differences
+// of the rung alphas, constants at least 0.06 apart.
+#include "color_transfer.glsl"
+#include "cube_storage.glsl"
+
+#ifndef GLOSSY_LEVELS
+#define GLOSSY_LEVELS 0
+#endif
+#define DIFFUSE_RUNG (GLOSSY_LEVELS + 1)
+#ifndef RUNG_FIRST
+#define RUNG_FIRST 0
+#endif
+#ifndef RUNG_LAST
+#define RUNG_LAST RUNG_FIRST
+#endif
+
+varying vec3 v_normal_w;
+varying vec3 v_to_eye_w;
+#ifdef HAS_TANGENT
+varying vec4 v_tangent_w;
+#endif
+#ifdef HAS_UV0
+varying vec2 v_uv0;
+#endif
+#ifdef HAS_UV1
+varying vec2 v_uv1;
+#endif
+#ifdef HAS_COLOR
+varying vec4 v_color;
+#endif
+
+uniform samplerCube u_diffuse_map;
+uniform float u_diffuse_face_size;
+uniform float u_diffuse_scale;
+#if RUNG_FIRST == 0
+uniform samplerCube u_reflection_map;
+uniform float u_reflection_face_size;
+uniform float u_reflection_scale;
+#endif
+#if GLOSSY_LEVELS >= 1 && RUNG_FIRST <= 1 && RUNG_LAST >= 1
+#define READS_GLOSSY0
+uniform samplerCube u_glossy0_map;
+uniform float u_glossy0_face_size;
+uniform float u_glossy0_scale;
+#endif
+#if GLOSSY_LEVELS >= 2 && RUNG_FIRST <= 2 && RUNG_LAST >= 2
+#define READS_GLOSSY1
+uniform samplerCube u_glossy1_map;
+uniform float u_glossy1_face_size;
+uniform float u_glossy1_scale;
+#endif
+// The ladder's rung alphas (ibl::specularRungAlphas), rungs 0..DIFFUSE_RUNG.
+uniform float u_rung_alpha[4];
+// The split-sum environment BRDF (ibl::EnvironmentBrdfTable): luminance
+// the scale of F0, alpha the bias.
+uniform sampler2D u_brdf_table;
+uniform float u_brdf_table_size;
+
+uniform vec4 u_base_color_factor;
+uniform float u_metallic_factor;
+uniform float u_roughness_factor;
+uniform vec3 u_emissive_factor;
+uniform float u_normal_scale;
+uniform float u_occlusion_strength;
+uniform float u_alpha_cutoff;
+// ibl::SceneLighting's clipped lights, added to the diffuse light.
+uniform vec3 u_clipped_direction_w[4];
+uniform vec3 u_clipped_diffuse_rgb[4];
+
+#ifdef BASE_COLOR_TEXTURE
+uniform sampler2D u_base_color_texture;
+uniform mat3 u_base_color_uv_transform;
+#endif
+#ifdef METALLIC_ROUGHNESS_TEXTURE
+uniform sampler2D u_metallic_roughness_texture;
+uniform mat3 u_metallic_roughness_uv_transform;
+#endif
+#ifdef NORMAL_TEXTURE
+uniform sampler2D u_normal_texture;
+uniform mat3 u_normal_uv_transform;
+#endif
+#ifdef OCCLUSION_TEXTURE
+uniform sampler2D u_occlusion_texture;
+uniform mat3 u_occlusion_uv_transform;
+#endif
+#ifdef EMISSIVE_TEXTURE
+uniform sampler2D u_emissive_texture;
+uniform mat3 u_emissive_uv_transform;
+#endif
+
+vec2 transformUv(mat3 transform, vec2 uv) { return (transform * vec3(uv, 1.0)).xy; }
+
+// The continuous place of alpha on the ladder: k + t between rungs k and
+// k + 1 (the alphas increase, so the clamped fractions add up to it).
+float ladderPosition(float alpha) {
+  float position = 0.0;
+  for (int k = 0; k < DIFFUSE_RUNG; ++k)
+    position += clamp((alpha - u_rung_alpha[k]) / (u_rung_alpha[k + 1] - u_rung_alpha[k]), 0.0, 1.0);
+  return position;
+}
+
+float rungWeight(float rung, float position) { return max(1.0 - abs(position - rung), 0.0); }
+
+void main() {
+  vec4 base_color = u_base_color_factor;
+#ifdef BASE_COLOR_TEXTURE
+  vec4 base_texel = texture2D(u_base_color_texture, transformUv(u_base_color_uv_transform, BASE_COLOR_UV));
+  base_color *= vec4(srgbToLinear(base_texel.rgb), base_texel.a);
+#endif
+#ifdef HAS_COLOR
+  base_color *= v_color;
+#endif
+  float alpha = base_color.a;
+#ifdef ALPHA_MASK
+  if (alpha < u_alpha_cutoff) discard;
+  alpha = 1.0;
+#endif
+#if !defined(ALPHA_MASK) && !defined(ALPHA_BLEND)
+  alpha = 1.0;
+#endif
+  float metallic = u_metallic_factor;
+  float roughness = u_roughness_factor;
+#ifdef METALLIC_ROUGHNESS_TEXTURE
+  vec4 metallic_roughness =
+      texture2D(u_metallic_roughness_texture, transformUv(u_metallic_roughness_uv_transform, METALLIC_ROUGHNESS_UV));
+  roughness *= metallic_roughness.g;
+  metallic *= metallic_roughness.b;
+#endif
+  metallic = clamp(metallic, 0.0, 1.0);
+  roughness = clamp(roughness, 0.0, 1.0);
+
+  vec3 n = normalize(v_normal_w);
+#ifdef NORMAL_TEXTURE
+  vec3 t = normalize(v_tangent_w.xyz - n * dot(n, v_tangent_w.xyz));
+  vec3 b = cross(n, t) * (v_tangent_w.w < 0.0 ? -1.0 : 1.0);
+  vec3 tangent_normal = texture2D(u_normal_texture, transformUv(u_normal_uv_transform, NORMAL_UV)).xyz * 2.0 - 1.0;
+  tangent_normal.xy *= u_normal_scale;
+#endif
+#ifdef DOUBLE_SIDED
+  // The back of a double-sided surface is lit as its own front.
+  if (!gl_FrontFacing) n = -n;
+#endif
+#ifdef NORMAL_TEXTURE
+#ifdef DOUBLE_SIDED
+  if (!gl_FrontFacing) {
+    t = -t;
+    b = -b;
+  }
+#endif
+  n = normalize(tangent_normal.x * t + tangent_normal.y * b + tangent_normal.z * n);
+#endif
+  vec3 to_eye = normalize(v_to_eye_w);
+  float n_dot_v = max(dot(n, to_eye), 1e-4);
+
+  vec3 c_diff = base_color.rgb * (1.0 - metallic);
+  vec3 f0 = mix(vec3(0.04), base_color.rgb, metallic);
+  vec2 brdf_coord = (vec2(roughness, sqrt(n_dot_v)) * (u_brdf_table_size - 1.0) + 0.5) / u_brdf_table_size;
+  vec4 brdf = texture2D(u_brdf_table, brdf_coord);
+  vec3 specular_reflectance = f0 * brdf.r + brdf.a;
+
+  vec3 diffuse = sampleCubeBilinear(u_diffuse_map, n, u_diffuse_face_size, u_diffuse_scale).rgb;
+  for (int k = 0; k < 4; ++k) diffuse += u_clipped_diffuse_rgb[k] * max(dot(n, u_clipped_direction_w[k]), 0.0);
+
+  vec3 mirror = reflect(-to_eye, n);
+  float position = clamp(ladderPosition(roughness * roughness), float(RUNG_FIRST), float(RUNG_LAST));
+  vec3 specular = vec3(0.0);
+#if RUNG_FIRST == 0
+  specular += rungWeight(0.0, position) *
+              sampleCubeBilinear(u_reflection_map, mirror, u_reflection_face_size, u_reflection_scale).rgb;
+#endif
+#ifdef READS_GLOSSY0
+  specular += rungWeight(1.0, position) *
+              sampleCubeBilinear(u_glossy0_map, mirror, u_glossy0_face_size, u_glossy0_scale).rgb;
+#endif
+#ifdef READS_GLOSSY1
+  specular += rungWeight(2.0, position) *
+              sampleCubeBilinear(u_glossy1_map, mirror, u_glossy1_face_size, u_glossy1_scale).rgb;
+#endif
+#if RUNG_LAST == DIFFUSE_RUNG
+  specular += rungWeight(float(DIFFUSE_RUNG), position) * diffuse;
+#endif
+
+  float occlusion = 1.0;
+#ifdef OCCLUSION_TEXTURE
+  occlusion = 1.0 + u_occlusion_strength *
+                        (texture2D(u_occlusion_texture, transformUv(u_occlusion_uv_transform, OCCLUSION_UV)).r - 1.0);
+#endif
+  vec3 emissive = u_emissive_factor;
+#ifdef EMISSIVE_TEXTURE
+  emissive *= srgbToLinear(texture2D(u_emissive_texture, transformUv(u_emissive_uv_transform, EMISSIVE_UV)).rgb);
+#endif
+  vec3 color = occlusion * (c_diff * (1.0 - specular_reflectance) * diffuse + specular_reflectance * specular) + emissive;
+  gl_FragColor = vec4(linearToSrgb(color), alpha);
+}

@@ -1,0 +1,145 @@
+// Stage 4 for a user's model: a glTF model (model::MeshModel) placed in W,
+// drawn with its metallic-roughness materials lit from the environment maps
+// (shaders-gles/model_object.frag; its CPU reference is
+// ibl::shadeMetallicRoughness).
+//
+// init() uploads everything once: vertices already placed in W (the
+// placement is fixed while the program runs), flat normals where the file
+// has none (glTF requires them), tangents from the UVs where a normal map
+// needs them and the file has none, 16-bit indices where they suffice,
+// 32-bit ones with OES_element_index_uint, otherwise the primitive cut into
+// pieces 16-bit indices can address. Textures become mipmapped RGBA8, resized
+// to powers of two where the GPU lacks OES_texture_npot (GLES2 core mipmaps
+// and repeats only those) and to max_texture_size_px at most.
+//
+// Each material gets a program for what it uses: its textures and their UV
+// sets, its vertex colours, its alpha mode, double-sidedness, and the span of
+// the specular ladder (mirror, glossy maps, diffuse) its roughness can reach
+// over its texture, so a matte material reads no mirror map and a mirror no
+// glossy one (needsGlossy tells the maps stage whether to make them at all).
+//
+// Order: opaque and masked primitives first, then blended ones back to
+// front (by their centres, from the eye), without depth writes. Blending is
+// over the sRGB-encoded camera image, as GLES2 without sRGB framebuffers
+// does it.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/types.hpp"
+#include "gles/capabilities.hpp"
+#include "gles/gl_objects.hpp"
+#include "ibl/environment_brdf.hpp"
+#include "ibl/surface_shading.hpp"
+#include "model/mesh_model.hpp"
+#include "passes/environment_maps.hpp"
+
+namespace probelight::passes {
+
+struct ModelRendererSettings {
+  double near_m = 0.01;
+  double far_m = 50.0;
+  // Larger images are shrunk to this: a 2048^2 RGBA8 texture with its mip
+  // chain is 22 MB of a board's GPU memory.
+  int max_texture_size_px = 2048;
+  // Testing the paths a board without these extensions takes.
+  bool force_short_indices = false;    // as if OES_element_index_uint were absent
+  bool force_power_of_two = false;     // as if OES_texture_npot were absent
+};
+
+// What init() made, for the report and the bench.
+struct ModelUploadStats {
+  std::size_t triangles = 0;
+  std::size_t draw_pieces = 0;     // glDrawElements calls a frame
+  std::size_t split_pieces = 0;    // pieces made because 16-bit indices could not address a primitive
+  std::size_t textures = 0;
+  std::uint64_t texture_bytes = 0;  // with mip chains
+  std::uint64_t vertex_bytes = 0;
+  std::uint64_t index_bytes = 0;
+  bool short_indices_only = true;   // no 32-bit index buffer was needed
+  double upload_ms = 0.0;
+};
+
+class ModelRenderer {
+ public:
+  bool init(const gles::Capabilities& capabilities, CubeStorage storage, const model::MeshModel& model,
+            const glm::dmat4& world_from_model, const ModelRendererSettings& settings, std::string& error);
+
+  // Whether some material's roughness reaches a glossy rung of a ladder
+  // with these glossy maps (sharpest first).
+  bool needsGlossy(const std::vector<double>& glossy_exponents) const;
+
+  // Draws the model into the bound framebuffer (whose viewport covers the
+  // camera image), depth-tested against what is there. Uses the glossy maps
+  // when environment.glossyWritten().
+  bool draw(const CameraIntrinsics& camera, const PoseCamFromWorld& pose, const ibl::SceneLighting& lighting,
+            EnvironmentMaps& environment, std::string& error);
+
+  const ModelUploadStats& stats() const { return stats_; }
+  // One line each, said once: what the renderer had to leave out or change.
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+ private:
+  enum Slot { kBaseColor, kMetallicRoughness, kNormal, kOcclusion, kEmissive, kSlotCount };
+  struct MaterialState {
+    model::Material material;
+    float min_roughness = 1.0f, max_roughness = 1.0f;
+    std::array<const gles::Texture*, kSlotCount> textures{};  // null: slot unused
+  };
+  // A piece's vertex format and material, shared by the pieces a primitive is cut into.
+  struct PieceFormat {
+    GLsizei stride_bytes = 0;
+    // Byte offsets into a vertex; -1 where the piece has no such attribute.
+    int tangent_offset = -1, uv0_offset = -1, uv1_offset = -1, color_offset = -1;
+    std::size_t material = 0;      // into materials_
+    std::array<bool, kSlotCount> slot_used{};  // textures this piece can map (its UV set exists)
+    std::string defines;           // everything but the rungs
+    glm::vec3 centre_w{0.0f};
+  };
+  struct Piece : PieceFormat {
+    gles::Buffer vertices;
+    gles::Buffer indices;
+    GLsizei index_count = 0;
+    GLenum index_type = GL_UNSIGNED_SHORT;
+  };
+
+  bool uploadPrimitive(const model::Primitive& primitive, std::size_t material, const glm::dmat4& world_from_model,
+                       std::string& error);
+  const gles::Texture* textureFor(const model::MeshModel& model, const model::TextureSlot& slot, std::string& error);
+  const gles::Program* programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
+                                  std::string& error);
+  bool drawPiece(const Piece& piece, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
+                 const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
+                 const std::vector<double>& rung_alphas, std::string& error);
+
+  ModelRendererSettings settings_;
+  gles::Capabilities capabilities_;
+  CubeStorage storage_ = CubeStorage::kSrgb8;
+  std::vector<MaterialState> materials_;
+  std::vector<Piece> pieces_;
+  std::map<std::tuple<int, int, int, int, bool>, gles::Texture> textures_;  // image, wrap s, wrap t, mag nearest
+  std::map<std::string, gles::Program> programs_;
+  gles::Texture brdf_table_;
+  int brdf_table_size_ = 0;
+  ModelUploadStats stats_;
+  std::vector<std::string> warnings_;
+};
+
+// KHR_texture_transform's uv' = T R S uv as the 3x3 matrix the shader applies.
+glm::mat3 textureTransformMatrix(const model::TextureSlot& slot);
+
+// The range of roughness a material reaches: its factor times the least and
+// the greatest G of its metallic-roughness image (the factor alone without
+// one). The GPU's filtering only interpolates texels, so it stays within.
+std::pair<float, float> materialRoughnessRange(const model::Material& material, const model::MeshModel& model);
+
+// The power of two nearest to size (in ratio), at most max_size (itself a power of two or not).
+int nearestPowerOfTwo(int size, int max_size);
+
+}  // namespace probelight::passes

@@ -1,0 +1,453 @@
+// A glTF model on the GPU (passes/model_renderer) against the CPU reference
+// ibl::shadeMetallicRoughness, with the maps the GPU read (read back); the
+// alpha modes, the 16-bit index split and the texture paths; the corpus.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "gles/render_target.hpp"
+#include "gles_test_support.hpp"
+#include "ibl/camera_projection.hpp"
+#include "ibl/color_transfer.hpp"
+#include "ibl/metallic_roughness.hpp"
+#include "model/gltf_loader.hpp"
+#include "model/model_placement.hpp"
+#include "passes/camera_frame_texture.hpp"
+#include "passes/environment_maps.hpp"
+#include "passes/model_renderer.hpp"
+#include "passes/object_compositor.hpp"
+
+namespace probelight {
+namespace {
+
+using test::GpuTest;
+
+constexpr double kHalfWidthM = 0.08;
+constexpr double kHeightM = 0.16;
+constexpr int kTexturePx = 16;  // 4 x 4 blocks of 4 x 4 texels
+constexpr int kBlockPx = 4;
+
+// The colour of block (bx, by) of the test texture, sRGB bytes.
+glm::u8vec4 blockColor(int bx, int by) {
+  return {static_cast<std::uint8_t>(40 + 60 * bx), static_cast<std::uint8_t>(220 - 50 * by),
+          static_cast<std::uint8_t>(90 + 30 * ((bx + by) % 3)), 255};
+}
+
+// A vertical square in the plane y = 0 facing -y (toward the camera), u
+// along +x and v down the square (glTF's UV origin is the image's top left).
+model::MeshModel texturedQuad(const model::Material& material, bool with_texture, std::uint8_t alpha_left = 255) {
+  model::MeshModel quad;
+  model::Primitive p;
+  const auto w = static_cast<float>(kHalfWidthM), h = static_cast<float>(kHeightM);
+  p.positions_m = {{-w, 0, 0}, {w, 0, 0}, {w, 0, h}, {-w, 0, h}};
+  p.normals = {{0, -1, 0}, {0, -1, 0}, {0, -1, 0}, {0, -1, 0}};
+  p.uv0 = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+  p.indices = {0, 1, 2, 0, 2, 3};
+  p.material = 0;
+  quad.primitives.push_back(p);
+  quad.materials.push_back(material);
+  if (with_texture) {
+    model::TextureImage image;
+    image.name = "blocks";
+    image.width = image.height = kTexturePx;
+    for (int y = 0; y < kTexturePx; ++y)
+      for (int x = 0; x < kTexturePx; ++x) {
+        glm::u8vec4 c = blockColor(x / kBlockPx, y / kBlockPx);
+        if (x < kTexturePx / 2) c.a = alpha_left;
+        image.rgba.insert(image.rgba.end(), {c.r, c.g, c.b, c.a});
+      }
+    quad.images.push_back(image);
+  }
+  quad.min_m = {-w, 0, 0};
+  quad.max_m = {w, 0, h};
+  return quad;
+}
+
+struct ModelStage {
+  CameraIntrinsics camera = test::testCamera();
+  PoseCamFromWorld pose = test::lookAt({0.03, -0.32, 0.12}, {0.0, 0.0, 0.08});
+  gles::RenderTarget target;
+  passes::CameraFrameTexture frame;
+  passes::EnvironmentMaps maps;
+  passes::ObjectCompositor compositor;
+  std::optional<ibl::CubeMapRGB> diffuse, reflection;
+  std::vector<ibl::CubeMapRGB> glossy_maps;
+};
+
+void initStage(ModelStage& stage, const gles::Capabilities& caps) {
+  std::string error;
+  ASSERT_TRUE(stage.target.init(stage.camera.width_px, stage.camera.height_px, error)) << error;
+  ASSERT_TRUE(stage.frame.init(caps, error)) << error;
+  ASSERT_TRUE(stage.maps.init(caps, {}, error)) << error;
+  ASSERT_TRUE(stage.compositor.init(caps, {}, stage.maps.storage(), error)) << error;
+  ibl::CubeMapRGB environment(stage.maps.settings().reflection_face_size);
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face)
+    for (int y = 0; y < environment.face_size; ++y)
+      for (int x = 0; x < environment.face_size; ++x)
+        environment.texel(face, x, y) =
+            glm::vec3(test::analyticEnvironment(ibl::cubeTexelCenterDirection(face, x, y, environment.face_size)));
+  ASSERT_TRUE(stage.maps.setReflection(environment, error)) << error;
+  ASSERT_TRUE(stage.maps.updateDiffuse(error)) << error;
+  ASSERT_TRUE(stage.maps.updateGlossy(error)) << error;
+  stage.diffuse = stage.maps.readDiffuse(error);
+  ASSERT_TRUE(stage.diffuse) << error;
+  stage.reflection = stage.maps.readReflection(error);
+  ASSERT_TRUE(stage.reflection) << error;
+  for (int level = 0; level < stage.maps.glossyLevels(); ++level) {
+    const auto glossy = stage.maps.readGlossy(level, error);
+    ASSERT_TRUE(glossy) << error;
+    stage.glossy_maps.push_back(*glossy);
+  }
+  ImageRGB8 grey;
+  grey.resize(stage.camera.width_px, stage.camera.height_px);
+  std::fill(grey.pixels.begin(), grey.pixels.end(), 90);
+  ASSERT_TRUE(stage.frame.upload(grey, error)) << error;
+}
+
+bool renderModel(ModelStage& stage, passes::ModelRenderer& renderer, ImageRGB8& result, std::string& error) {
+  stage.target.bind();
+  stage.compositor.drawCameraBackground(stage.frame);
+  if (!renderer.draw(stage.camera, stage.pose, ibl::SceneLighting{}, stage.maps, error)) return false;
+  return stage.target.readRGB(result, error);
+}
+
+// Where pixel (x, y)'s calibrated ray meets the quad's plane: (u, v), or
+// nothing off the quad.
+std::optional<glm::dvec2> quadUvAt(const ModelStage& stage, int x, int y) {
+  const glm::dvec3 eye = stage.pose.cameraCenterWorld();
+  const glm::dvec3 ray =
+      glm::normalize(glm::transpose(stage.pose.R_cam_from_world) * ibl::pixelToCameraRay(stage.camera, {x, y}));
+  if (!(ray.y > 0.0)) return std::nullopt;
+  const glm::dvec3 hit = eye + (-eye.y / ray.y) * ray;
+  const glm::dvec2 uv((hit.x + kHalfWidthM) / (2 * kHalfWidthM), 1.0 - hit.z / kHeightM);
+  if (uv.x < 0.0 || uv.x > 1.0 || uv.y < 0.0 || uv.y > 1.0) return std::nullopt;
+  return uv;
+}
+
+// Away from the block edges by a texel, bilinear filtering returns the
+// block's own colour: the texel is known exactly.
+std::optional<glm::u8vec4> blockAt(const glm::dvec2& uv) {
+  const glm::dvec2 texel = uv * double(kTexturePx);
+  const glm::dvec2 within = texel - glm::floor(texel / double(kBlockPx)) * double(kBlockPx);
+  if (within.x < 1.0 || within.x > kBlockPx - 1.0 || within.y < 1.0 || within.y > kBlockPx - 1.0) return std::nullopt;
+  return blockColor(static_cast<int>(texel.x) / kBlockPx, static_cast<int>(texel.y) / kBlockPx);
+}
+
+struct ShadingCase {
+  const char* name;
+  glm::vec4 base_color_factor;
+  float metallic, roughness;
+  bool textured;
+};
+
+class ModelShadingTest : public GpuTest, public ::testing::WithParamInterface<bool> {};
+
+// Every pixel of the quad's interior (and off the texture's block edges)
+// against the CPU reference at that pixel's ray. The quad is flat, so its
+// normal is exact and so is the view direction: the budget is the output's
+// rounding (0.5 level), fp32 arithmetic, and the GPU's bilinear weights in
+// the 48x48 8-bit BRDF table, which llvmpipe (and boards) quantise to 8 bits
+// of a texel: the table moves by at most 3 codes a texel, so 3/256 of a code.
+// 1.5 levels bounds them all; a wrong ladder rung, a missed sRGB decode or a
+// Fresnel term left out moves pixels by many levels (checked below).
+TEST_P(ModelShadingTest, MatchesCpuShadeMetallicRoughness) {
+  const bool force_8bit = GetParam();
+  const gles::Capabilities caps =
+      force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
+  ModelStage stage;
+  ASSERT_NO_FATAL_FAILURE(initStage(stage, caps));
+  std::vector<const ibl::CubeMapRGB*> glossy;
+  for (const auto& map : stage.glossy_maps) glossy.push_back(&map);
+  std::vector<double> exponents(stage.maps.settings().glossy_exponent.begin(),
+                                stage.maps.settings().glossy_exponent.begin() + stage.maps.glossyLevels());
+  const std::vector<double> rung_alphas = ibl::specularRungAlphas(exponents);
+  const ibl::EnvironmentBrdfTable table;
+
+  const ShadingCase cases[] = {
+      {"textured dielectric, rough", {1, 1, 1, 1}, 0.0f, 1.0f, true},
+      {"textured dielectric, roughness 0.6", {1, 1, 1, 1}, 0.0f, 0.6f, true},
+      {"gold, roughness 0.3", {1.0f, 0.77f, 0.34f, 1}, 1.0f, 0.3f, false},
+      {"steel, roughness 0.05", {0.56f, 0.57f, 0.58f, 1}, 1.0f, 0.05f, false},
+  };
+  for (const ShadingCase& c : cases) {
+    model::Material material;
+    material.name = c.name;
+    material.base_color_factor = c.base_color_factor;
+    material.metallic_factor = c.metallic;
+    material.roughness_factor = c.roughness;
+    if (c.textured) material.base_color.image = 0;
+    const model::MeshModel quad = texturedQuad(material, c.textured);
+    passes::ModelRenderer renderer;
+    std::string error;
+    ASSERT_TRUE(renderer.init(caps, stage.maps.storage(), quad, glm::dmat4(1.0), {}, error)) << error;
+    ImageRGB8 result;
+    ASSERT_TRUE(renderModel(stage, renderer, result, error)) << error;
+
+    int compared = 0;
+    double max_error = 0.0, max_error_if_wrong = 0.0;
+    for (int y = 0; y < result.height; ++y)
+      for (int x = 0; x < result.width; ++x) {
+        const auto uv = quadUvAt(stage, x, y);
+        // Half a pixel inside the edges at least: about 0.004 of the quad.
+        if (!uv || uv->x < 0.01 || uv->x > 0.99 || uv->y < 0.01 || uv->y > 0.99) continue;
+        glm::vec3 base(c.base_color_factor);
+        if (c.textured) {
+          const auto block = blockAt(*uv);
+          if (!block) continue;
+          base *= glm::vec3(ibl::srgbToLinear(block->r / 255.0f), ibl::srgbToLinear(block->g / 255.0f),
+                            ibl::srgbToLinear(block->b / 255.0f));
+        }
+        ibl::MetallicRoughnessSurface surface;
+        surface.base_color = base;
+        surface.metallic = c.metallic;
+        surface.roughness = c.roughness;
+        const glm::dvec3 ray = glm::normalize(glm::transpose(stage.pose.R_cam_from_world) *
+                                              ibl::pixelToCameraRay(stage.camera, {x, y}));
+        const glm::vec3 to_eye(-ray);
+        const glm::vec3 linear = ibl::shadeMetallicRoughness({0, -1, 0}, to_eye, surface, *stage.diffuse,
+                                                             *stage.reflection, glossy, rung_alphas, table, {});
+        // What a renderer a little wrong would give: the texture's bytes
+        // taken as linear (no sRGB decode), or a metal's metallic misread
+        // as 0.5 (the channel read from the wrong place, or lost).
+        ibl::MetallicRoughnessSurface wrong = surface;
+        if (c.textured) {
+          const auto block = blockAt(*uv);
+          wrong.base_color = glm::vec3(c.base_color_factor) * glm::vec3(*block) / 255.0f;
+        } else {
+          wrong.metallic = 0.5f;
+        }
+        const glm::vec3 naive = ibl::shadeMetallicRoughness({0, -1, 0}, to_eye, wrong, *stage.diffuse,
+                                                            *stage.reflection, glossy, rung_alphas, table, {});
+        for (int k = 0; k < 3; ++k) {
+          const double expected = 255.0 * ibl::linearToSrgb(std::clamp(linear[k], 0.0f, 1.0f));
+          const double gpu = result.row(y)[3 * x + k];
+          max_error = std::max(max_error, std::abs(gpu - expected));
+          max_error_if_wrong = std::max(
+              max_error_if_wrong, std::abs(255.0 * ibl::linearToSrgb(std::clamp(naive[k], 0.0f, 1.0f)) - expected));
+        }
+        ++compared;
+      }
+    std::printf("[ measure  ] model shading (%s maps, %s): %d px, max |GPU-CPU| %.2f levels (a little wrong: %.1f)\n",
+                stage.maps.storageDescription().c_str(), c.name, compared, max_error, max_error_if_wrong);
+    EXPECT_GT(compared, 3000) << c.name;
+    EXPECT_LE(max_error, 1.5) << c.name;
+    EXPECT_GT(max_error_if_wrong, 3.0) << c.name << ": the comparison must tell a small mistake apart";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Storage, ModelShadingTest, ::testing::Values(false, true),
+                         [](const auto& info) { return info.param ? "EightBitPath" : "BestPath"; });
+
+// MASK: texels under the cutoff are not drawn at all (the background stays
+// byte for byte), those above are opaque. BLEND: alpha 128 mixes the lit
+// colour and the background in sRGB bytes, within 1 level of 8-bit blending.
+TEST_F(GpuTest, AlphaMaskDiscardsAndBlendMixesWithTheVideo) {
+  ModelStage stage;
+  ASSERT_NO_FATAL_FAILURE(initStage(stage, test::sharedCapabilities()));
+  std::string error;
+  model::Material opaque;
+  opaque.metallic_factor = 0.0f;
+  opaque.base_color.image = 0;
+  passes::ModelRenderer reference_renderer;
+  ASSERT_TRUE(reference_renderer.init(test::sharedCapabilities(), stage.maps.storage(), texturedQuad(opaque, true),
+                                      glm::dmat4(1.0), {}, error))
+      << error;
+  ImageRGB8 lit;
+  ASSERT_TRUE(renderModel(stage, reference_renderer, lit, error)) << error;
+
+  for (const model::AlphaMode mode : {model::AlphaMode::kMask, model::AlphaMode::kBlend}) {
+    model::Material material = opaque;
+    material.alpha_mode = mode;
+    const std::uint8_t alpha_left = mode == model::AlphaMode::kMask ? 100 : 128;  // under the cutoff 0.5 for MASK
+    passes::ModelRenderer renderer;
+    ASSERT_TRUE(renderer.init(test::sharedCapabilities(), stage.maps.storage(), texturedQuad(material, true, alpha_left),
+                              glm::dmat4(1.0), {}, error))
+        << error;
+    ImageRGB8 result;
+    ASSERT_TRUE(renderModel(stage, renderer, result, error)) << error;
+    int left = 0, right = 0;
+    double max_left_error = 0.0, max_right_error = 0.0;
+    for (int y = 0; y < result.height; ++y)
+      for (int x = 0; x < result.width; ++x) {
+        const auto uv = quadUvAt(stage, x, y);
+        // A texel (1/16) and more from the edges and the middle: REPEAT's
+        // bilinear reads mix the far side's alpha in at the quad's edges.
+        if (!uv || uv->y < 0.07 || uv->y > 0.93 || uv->x < 0.07 || uv->x > 0.93 || std::abs(uv->x - 0.5) < 0.08) continue;
+        for (int k = 0; k < 3; ++k) {
+          const double gpu = result.row(y)[3 * x + k], shaded = lit.row(y)[3 * x + k];
+          if (uv->x < 0.5) {
+            const double expected = mode == model::AlphaMode::kMask ? 90.0 : (128.0 * shaded + 127.0 * 90.0) / 255.0;
+            max_left_error = std::max(max_left_error, std::abs(gpu - expected));
+          } else {
+            max_right_error = std::max(max_right_error, std::abs(gpu - shaded));
+          }
+        }
+        (uv->x < 0.5 ? left : right)++;
+      }
+    EXPECT_GT(left, 3000);
+    EXPECT_GT(right, 3000);
+    EXPECT_LE(max_left_error, mode == model::AlphaMode::kMask ? 0.0 : 1.0) << static_cast<int>(mode);
+    EXPECT_EQ(max_right_error, 0.0) << static_cast<int>(mode);
+  }
+}
+
+// A grid of 300 x 300 quads (90,601 vertices): beyond 16-bit indices. Cut
+// into pieces (as a board without OES_element_index_uint needs) it must
+// rasterise to the very same pixels as one 32-bit draw.
+TEST_F(GpuTest, ModelsBeyondSixteenBitIndicesDrawTheSameWhenSplit) {
+  const gles::Capabilities& caps = test::sharedCapabilities();
+  if (!caps.element_index_uint) GTEST_SKIP() << "no OES_element_index_uint to compare the split with";
+  ModelStage stage;
+  ASSERT_NO_FATAL_FAILURE(initStage(stage, caps));
+  model::MeshModel grid;
+  model::Primitive p;
+  const int n = 300;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      // A wavy sheet, so the shading differs from triangle to triangle.
+      const float x = -0.08f + 0.16f * i / n, z = 0.16f * j / n;
+      const float y = 0.01f * std::sin(40.0f * x) * std::cos(30.0f * z);
+      p.positions_m.push_back({x, y, z});
+      p.normals.push_back(glm::normalize(glm::vec3(-0.4f * std::cos(40.0f * x) * std::cos(30.0f * z), -1.0f,
+                                                   0.3f * std::sin(40.0f * x) * std::sin(30.0f * z))));
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const auto a = static_cast<std::uint32_t>(j * (n + 1) + i), b = a + 1, c = a + n + 1, d = c + 1;
+      p.indices.insert(p.indices.end(), {a, b, d, a, d, c});
+    }
+  grid.primitives.push_back(p);
+  grid.materials.push_back(model::Material{});
+  grid.materials[0].roughness_factor = 0.2f;
+  std::string error;
+  ImageRGB8 whole, split;
+  passes::ModelRenderer one_draw;
+  ASSERT_TRUE(one_draw.init(caps, stage.maps.storage(), grid, glm::dmat4(1.0), {}, error)) << error;
+  EXPECT_FALSE(one_draw.stats().short_indices_only);
+  ASSERT_TRUE(renderModel(stage, one_draw, whole, error)) << error;
+  passes::ModelRendererSettings settings;
+  settings.force_short_indices = true;
+  passes::ModelRenderer pieces;
+  ASSERT_TRUE(pieces.init(caps, stage.maps.storage(), grid, glm::dmat4(1.0), settings, error)) << error;
+  EXPECT_GE(pieces.stats().split_pieces, 2u);
+  EXPECT_TRUE(pieces.stats().short_indices_only);
+  ASSERT_TRUE(renderModel(stage, pieces, split, error)) << error;
+  int differing = 0, covered = 0;
+  for (std::size_t i = 0; i < whole.pixels.size(); ++i) {
+    differing += whole.pixels[i] != split.pixels[i];
+    covered += whole.pixels[i] != 90;
+  }
+  EXPECT_GT(covered, 20000);
+  EXPECT_EQ(differing, 0);
+}
+
+TEST(ModelTextures, TextureTransformIsTranslationTimesRotationTimesScale) {
+  model::TextureSlot slot;
+  slot.uv_offset = {0.5f, 0.25f};
+  slot.uv_rotation_rad = 0.5f * 3.14159265f;
+  slot.uv_scale = {2.0f, 3.0f};
+  // KHR_texture_transform's example order: scale (1, 0) -> (2, 0); rotate by
+  // its matrix [cos sin; -sin cos] -> (0, -2); translate -> (0.5, -1.75).
+  const glm::vec3 uv = passes::textureTransformMatrix(slot) * glm::vec3(1.0f, 0.0f, 1.0f);
+  EXPECT_NEAR(uv.x, 0.5f, 1e-6f);
+  EXPECT_NEAR(uv.y, -1.75f, 1e-6f);
+  EXPECT_EQ(passes::textureTransformMatrix(model::TextureSlot{}), glm::mat3(1.0f));
+}
+
+TEST(ModelTextures, PowersOfTwoAreTheNearestInRatioWithinTheLimit) {
+  EXPECT_EQ(passes::nearestPowerOfTwo(256, 2048), 256);
+  EXPECT_EQ(passes::nearestPowerOfTwo(300, 2048), 256);  // 300 / 256 < 512 / 300
+  EXPECT_EQ(passes::nearestPowerOfTwo(400, 2048), 512);
+  EXPECT_EQ(passes::nearestPowerOfTwo(5000, 2048), 2048);
+  EXPECT_EQ(passes::nearestPowerOfTwo(1, 2048), 1);
+  EXPECT_EQ(passes::nearestPowerOfTwo(0, 2048), 1);
+}
+
+TEST(ModelTextures, RoughnessRangeSpansTheTexturesGreenChannelTimesTheFactor) {
+  model::MeshModel model;
+  model::TextureImage image;
+  image.width = 2;
+  image.height = 1;
+  image.rgba = {0, 51, 0, 255, 0, 204, 0, 255};  // G 0.2 and 0.8
+  model.images.push_back(image);
+  model::Material material;
+  material.roughness_factor = 0.5f;
+  EXPECT_EQ(passes::materialRoughnessRange(material, model), std::make_pair(0.5f, 0.5f));
+  material.metallic_roughness.image = 0;
+  const auto [lo, hi] = passes::materialRoughnessRange(material, model);
+  EXPECT_NEAR(lo, 0.1f, 1e-6f);
+  EXPECT_NEAR(hi, 0.4f, 1e-6f);
+}
+
+// A mirror-smooth or matte model never makes the maps stage build glossy
+// maps; roughness between the mirror and the diffuse rung does.
+TEST_F(GpuTest, GlossyMapsAreNeededOnlyForRoughnessBetweenMirrorAndMatte) {
+  ModelStage stage;
+  ASSERT_NO_FATAL_FAILURE(initStage(stage, test::sharedCapabilities()));
+  const std::vector<double> exponents{128.0, 16.0};
+  for (const auto& [roughness, needed] : {std::pair{0.0f, false}, {1.0f, false}, {0.3f, true}, {0.5f, true}}) {
+    model::Material material;
+    material.roughness_factor = roughness;
+    passes::ModelRenderer renderer;
+    std::string error;
+    ASSERT_TRUE(renderer.init(test::sharedCapabilities(), stage.maps.storage(), texturedQuad(material, false),
+                              glm::dmat4(1.0), {}, error))
+        << error;
+    EXPECT_EQ(renderer.needsGlossy(exponents), needed) << roughness;
+    EXPECT_FALSE(renderer.needsGlossy({})) << roughness;
+  }
+}
+
+// The corpus's valid models upload and draw, over a real placement, with no
+// GL error; BoxTextured's logo shows (its pixels are not one flat colour per
+// face), and the power-of-two path (boards without OES_texture_npot) draws
+// it too.
+TEST_F(GpuTest, CorpusModelsDrawOnTheTag) {
+  const std::string corpus = "/usr/share/assimp/models/glTF2/";
+  ModelStage stage;
+  stage.pose = test::lookAt({0.12, -0.30, 0.22}, {0.0, 0.0, 0.03});
+  ASSERT_NO_FATAL_FAILURE(initStage(stage, test::sharedCapabilities()));
+  for (const std::string& file :
+       {"BoxTextured-glTF/BoxTextured.gltf", "BoxTextured-glTF-Binary/BoxTextured.glb",
+        "2CylinderEngine-glTF-Binary/2CylinderEngine.glb", "textureTransform/TextureTransformTest.gltf"}) {
+    model::MeshModel model;
+    std::string error;
+    ASSERT_TRUE(model::loadGltfModel(corpus + file, {}, model, error)) << error;
+    // Scaled to 8 cm across, whatever the file's size.
+    const glm::vec3 extent = model.max_m - model.min_m;
+    const double scale = 0.08 / std::max({extent.x, extent.y, extent.z});
+    const glm::dmat4 world = model::worldFromModel(model, {{0.0, 0.0}, 0.4, scale});
+    for (const bool power_of_two : {false, true}) {
+      passes::ModelRendererSettings settings;
+      settings.force_power_of_two = power_of_two;
+      passes::ModelRenderer renderer;
+      ASSERT_TRUE(renderer.init(test::sharedCapabilities(), stage.maps.storage(), model, world, settings, error))
+          << file << ": " << error;
+      ImageRGB8 result;
+      ASSERT_TRUE(renderModel(stage, renderer, result, error)) << file << ": " << error;
+      int covered = 0;
+      std::vector<int> histogram(256, 0);
+      for (std::size_t i = 0; i + 2 < result.pixels.size(); i += 3) {
+        if (result.pixels[i] == 90 && result.pixels[i + 1] == 90 && result.pixels[i + 2] == 90) continue;
+        ++covered;
+        ++histogram[result.pixels[i + 1]];
+      }
+      int distinct = 0;
+      for (int count : histogram) distinct += count > 0;
+      std::printf("[ measure  ] %s%s: %zu triangles, %zu draws, %.1f KiB textures, %d px covered, %d green levels\n",
+                  file.c_str(), power_of_two ? " (power-of-two path)" : "", renderer.stats().triangles,
+                  renderer.stats().draw_pieces, renderer.stats().texture_bytes / 1024.0, covered, distinct);
+      EXPECT_GT(covered, 2000) << file;
+      if (file.find("BoxTextured") != std::string::npos) {
+        EXPECT_GT(distinct, 40) << file << ": the logo must show";
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace probelight
