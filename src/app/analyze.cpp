@@ -25,12 +25,14 @@
 #include "ibl/hdr_bracket.hpp"
 #include "ibl/irradiance.hpp"
 #include "ibl/lighting_fit.hpp"
+#include "model/gltf_loader.hpp"
 #include "stages/bracket_merge.hpp"
 #include "stages/compose_stage.hpp"
 #include "stages/frame_context.hpp"
 #include "stages/lighting_report.hpp"
 #include "stages/maps_stage.hpp"
 #include "stages/run_report.hpp"
+#include "stages/scene_object.hpp"
 #include "stages/shadows_stage.hpp"
 #include "stages/stage_settings.hpp"
 #include "stages/track_stage.hpp"
@@ -104,11 +106,38 @@ class Analyzer {
     if (ec || !fs::is_directory(options_.out_dir))
       return Status::badInput(options_.out_dir + ": cannot create the output folder (--out)" +
                               (ec ? ": " + ec.message() : std::string()));
+    PROBELIGHT_TRY(makeObject());
     frame_.rgb = rgbFromBgr(frame_bgr_);
     frame_.finishRgb();
     frame_.metadata.origin = options_.frame_path;
     track_ = std::make_unique<TrackStage>(settings_, rig_, camera_, report_, /*fit_probe_edges=*/true);
     return track_->init();
+  }
+
+  // The object `render` puts in (its flags), or probelight.yaml's for
+  // `analyze` (which glossy maps its material needs).
+  Status makeObject() {
+    if (!render_) return sceneObjectFromConfig(settings_, object_);
+    object_ = SceneObject{};
+    if (render_->object == "model") {
+      auto model = std::make_shared<model::MeshModel>();
+      std::string error;
+      if (!model::loadGltfModel(render_->model_path, {}, *model, error)) return Status::badInput(error + " (--model)");
+      for (const std::string& warning : model->warnings) log_ << "probelight: warning: " << warning << "\n";
+      object_ = modelSceneObject(std::move(model), {render_->at_w, glm::radians(render_->yaw_deg), render_->scale});
+      return Status::ok();
+    }
+    if (render_->object == "box") {
+      object_.shape.shape = ibl::ShadowCaster::Shape::kBox;
+      object_.shape.box_size_m = render_->box_size_m;
+      object_.shape.box_yaw_rad = glm::radians(render_->yaw_deg);
+    } else {
+      object_.shape.radius_m = render_->radius_m;
+    }
+    object_.shape.position_w = render_->at_w;
+    object_.material.albedo = glm::vec3(render_->albedo);  // Lambertian
+    object_.material.k_diffuse = 1.0f;
+    return Status::ok();
   }
 
   // A single frame has no history, so a tag cut by the frame edge reads as
@@ -209,7 +238,8 @@ class Analyzer {
     if (settings_.maps.force_8bit) capabilities_ = capabilities_.withoutExtensions();
     json_["gl"] = capabilities_.summary();
     upload_ = std::make_unique<UploadStage>(report_, settings_.gpu_finish);
-    maps_ = std::make_unique<MapsStage>(settings_, rig_.probe_reflectance, objectMaterial(settings_), report_);
+    maps_ = std::make_unique<MapsStage>(settings_, rig_.probe_reflectance,
+                                        object_.readsGlossy(glossyExponents(settings_)), report_);
     PROBELIGHT_TRY(upload_->init(capabilities_));
     PROBELIGHT_TRY(maps_->init(capabilities_));
     for (int run = 0; run < 2; ++run) {
@@ -357,17 +387,7 @@ class Analyzer {
   // render: the object, lit by the maps, and its shadow on the real ground,
   // over the frame: the shadows and compose stages `run` draws with.
   Status renderComposite() {
-    SceneObject object;
-    if (render_->object == "box") {
-      object.shape.shape = ibl::ShadowCaster::Shape::kBox;
-      object.shape.box_size_m = render_->box_size_m;
-      object.shape.box_yaw_rad = glm::radians(render_->yaw_deg);
-    } else {
-      object.shape.radius_m = render_->radius_m;
-    }
-    object.shape.position_w = render_->at_w;
-    object.material.albedo = glm::vec3(render_->albedo);  // Lambertian
-    object.material.k_diffuse = 1.0f;
+    const SceneObject& object = object_;
     ShadowsStage shadows(settings_, object.shape, report_);
     ComposeStage compose(object, camera_, report_, settings_.gpu_finish);
     gles::RenderTarget target;
@@ -390,10 +410,20 @@ class Analyzer {
     if (shadows.pass().hasShadow())
       if (const auto fraction = shadows.pass().readFraction(error))
         for (const glm::vec3& f : *fraction) darkest = std::min(darkest, static_cast<double>(std::min({f.r, f.g, f.b})));
-    Json shape = {{"shape", render_->object}, {"at_w", vec2Json(render_->at_w)}, {"albedo", vec3(render_->albedo)}};
-    if (object.shape.shape == ibl::ShadowCaster::Shape::kSphere) {
+    Json shape = {{"shape", render_->object}, {"at_w", vec2Json(render_->at_w)}};
+    if (object.isModel()) {
+      shape["file"] = object.model->source;
+      shape["triangles"] = object.model->triangleCount();
+      shape["scale"] = render_->scale;
+      shape["yaw_deg"] = render_->yaw_deg;
+      shape["load_ms"] = object.model->load_ms;
+      shape["bounding_radius_m"] = object.shape.mesh_radius_m;
+      if (report_.extra.contains("model")) shape["renderer"] = report_.extra["model"];
+    } else if (object.shape.shape == ibl::ShadowCaster::Shape::kSphere) {
+      shape["albedo"] = vec3(render_->albedo);
       shape["radius_m"] = object.shape.radius_m;
     } else {
+      shape["albedo"] = vec3(render_->albedo);
       shape["size_m"] = vec3(object.shape.box_size_m);
       shape["yaw_deg"] = render_->yaw_deg;
     }
@@ -488,6 +518,7 @@ class Analyzer {
   const AnalyzeOptions& options_;
   std::ostream& log_;
   const RenderOptions* render_;  // null for analyze
+  SceneObject object_;           // what render puts in (analyze: probelight.yaml's)
   AppSettings settings_;
   CameraIntrinsics camera_;
   RigGeometry rig_;

@@ -1,5 +1,7 @@
 #include "app/app_settings.hpp"
 
+#include <filesystem>
+
 #include "config/config_reader.hpp"
 #include "tracking/tag_detector.hpp"
 
@@ -94,6 +96,12 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.object.shininess = object.readDouble("shininess", settings.object.shininess, Range::closed(1.0, 4096.0));
   settings.object.k_reflect = object.readDouble("k_reflect", settings.object.k_reflect, Range::closed(0.0, 1.0));
   settings.object.glossiness = object.readDouble("glossiness", settings.object.glossiness, Range::closed(0.0, 1.0));
+  settings.object.model_path = object.readString("model", settings.object.model_path);
+  if (!settings.object.model_path.empty() && std::filesystem::path(settings.object.model_path).is_relative())
+    settings.object.model_path =
+        (std::filesystem::path(path).parent_path() / settings.object.model_path).lexically_normal().string();
+  settings.object.yaw_deg = object.readDouble("yaw", settings.object.yaw_deg, Range::closed(-360.0, 360.0));
+  settings.object.scale = object.readDouble("scale", settings.object.scale, Range::openClosed(0.0, 1000.0));
   object.rejectUnknownFields();
 
   ConfigReader recalibration = file.section("recalibration");

@@ -296,7 +296,9 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
         into(options.capture_dir)},
        {"--env", "NAME|FILE", "sim: studio, sun_sky, overcast, coloured_wall, uniform, or an .exr/.hdr file",
         into(options.sim_env)},
-       {"--path", "NAME", "sim: camera path: static, orbit, slow_wobble, random", into(options.sim_path)}},
+       {"--path", "NAME", "sim: camera path: static, orbit, slow_wobble, random", into(options.sim_path)},
+       {"--model", "FILE", "a glTF 2.0 model (.gltf, .glb) to show instead of the sphere (overrides object.model)",
+        into(options.model_path)}},
       {{"-q,--quiet", "no per-frame status lines", [&] { options.quiet = true; }}});
   if (options.source == "images" && options.images.empty())
     throw UsageError("flag --source images needs --images FOLDER_OR_GLOB");
@@ -360,11 +362,15 @@ AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
 
 RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
   RenderOptions options;
-  bool have_size = false;
+  bool have_size = false, have_scale = false;
+  std::string object_flag;
   std::vector<ValuedFlag> valued = frameFlags(options.frame, "where composite.png and analysis.json go");
   const std::vector<ValuedFlag> object_flags = {
-      {"--object", "sphere|box", "the virtual object (default sphere)",
-       [&](auto& f, auto& v) { requireChoice(f, v, {"sphere", "box"}); options.object = v; }},
+      {"--object", "sphere|box", "the virtual object (default sphere; --model FILE for a model)",
+       [&](auto& f, auto& v) {
+         requireChoice(f, v, {"sphere", "box"});
+         object_flag = v;
+       }},
       {"--radius", "METRES", "sphere: its radius (required for a sphere)",
        [&](auto& f, auto& v) {
          options.radius_m = parseNumberList(f, v, 1, false, "a radius in metres, e.g. 0.03")[0];
@@ -378,7 +384,18 @@ RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
          options.box_size_m = {s[0], s[1], s[2]};
          have_size = true;
        }},
-      {"--yaw", "DEG", "box: turned about the tag's +Z (default 0)",
+      {"--model", "FILE", "a glTF 2.0 model (.gltf, .glb) with its own materials, instead of a sphere or box",
+       [&](auto&, auto& v) {
+         options.model_path = v;
+         options.object = "model";
+       }},
+      {"--scale", "S", "model: its size times S (default 1; glTF is in metres)",
+       [&](auto& f, auto& v) {
+         options.scale = parseNumberList(f, v, 1, false, "a factor, e.g. 0.5")[0];
+         if (!(options.scale > 0.0)) throw UsageError("flag " + f + ": the scale must be > 0, got '" + v + "'");
+         have_scale = true;
+       }},
+      {"--yaw", "DEG", "box, model: turned about the tag's +Z (default 0)",
        [&](auto& f, auto& v) { options.yaw_deg = parseNumberList(f, v, 1, false, "degrees")[0]; }},
       {"--at", "X,Y", "where it stands, metres on the ground of the tag's frame (default 0,0)",
        [&](auto& f, auto& v) {
@@ -399,6 +416,12 @@ RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
   if (options.frame.rig_path.empty()) throw UsageError("render needs --rig rig.yaml");
   if (options.frame.out_dir.empty()) throw UsageError("render needs --out DIR (where composite.png and analysis.json go)");
   checkBracketCount(options.frame);
+  if (!object_flag.empty() && !options.model_path.empty())
+    throw UsageError("flag --object: not with --model (the model is the object)");
+  if (!object_flag.empty()) options.object = object_flag;
+  if (options.object != "model" && have_scale) throw UsageError("flag --scale: only with --model");
+  if (options.object == "model" && options.radius_m != 0.0) throw UsageError("flag --radius: only for a sphere");
+  if (options.object == "model" && have_size) throw UsageError("flag --size: only for --object box");
   if (options.object == "sphere" && options.radius_m == 0.0) throw UsageError("render needs --radius METRES for a sphere");
   if (options.object == "box" && !have_size) throw UsageError("render needs --size X,Y,Z (metres) for a box");
   if (options.object == "sphere" && have_size) throw UsageError("flag --size: only for --object box");

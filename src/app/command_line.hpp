@@ -42,6 +42,7 @@ struct RunOptions {
   std::string rig_path;               // rig.yaml
   std::string sim_env;                // overrides sim.env
   std::string sim_path;               // overrides sim.camera_path
+  std::string model_path;             // --model: overrides object.model
   std::optional<int> save_every;      // overrides output.save_every
   std::string capture_dir;            // --capture: the last camera frame, camera.yaml and rig.yaml go here
   bool quiet = false;
@@ -88,10 +89,12 @@ AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args);
 // the frame, standing on the ground of W.
 struct RenderOptions {
   AnalyzeOptions frame;        // --frame, --camera, --rig, --out, --config
-  std::string object = "sphere";  // sphere | box
+  std::string object = "sphere";  // sphere | box | model
   double radius_m = 0.0;       // sphere: required
   glm::dvec3 box_size_m{0.0};  // box: --size X,Y,Z (required)
-  double yaw_deg = 0.0;        // box: turned about +Z
+  std::string model_path;      // --model FILE: a glTF model (object "model")
+  double scale = 1.0;          // model: --scale
+  double yaw_deg = 0.0;        // box, model: turned about +Z
   glm::dvec2 at_w{0.0};        // --at X,Y: where it stands
   glm::dvec3 albedo{0.8};      // --albedo A or R,G,B in [0, 1]
 };

@@ -71,17 +71,8 @@ LoadedInputs loadInputs(const RunOptions& options) {
   if (options.save_every) inputs.settings.save_every = *options.save_every;
   if (!options.sim_env.empty()) inputs.settings.sim.env = options.sim_env;
   if (!options.sim_path.empty()) inputs.settings.sim.camera_path = options.sim_path;
+  if (!options.model_path.empty()) inputs.settings.object.model_path = options.model_path;
   return inputs;
-}
-
-// The virtual object of probelight.yaml's `object` section: a sphere resting
-// on the ground.
-SceneObject sceneObject(const PipelineSettings& settings) {
-  SceneObject object;
-  object.shape.position_w = settings.object.position_w;
-  object.shape.radius_m = settings.object.radius_m;
-  object.material = objectMaterial(settings);
-  return object;
 }
 
 // One `probelight run`: the seams (camera, display, button) and the stages,
@@ -384,10 +375,15 @@ class Kiosk {
 
   Status makeStages() {
     const AppSettings& settings = inputs_.settings;
-    const SceneObject object = sceneObject(settings);
+    SceneObject object;
+    PROBELIGHT_TRY(sceneObjectFromConfig(settings, object));
+    if (object.isModel())
+      for (const std::string& warning : object.model->warnings)
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << warning << "\n";
     upload_ = std::make_unique<UploadStage>(report_, settings.gpu_finish);
     track_ = std::make_unique<TrackStage>(settings, inputs_.rig, inputs_.camera, report_);
-    maps_ = std::make_unique<MapsStage>(settings, inputs_.rig.probe_reflectance, object.material, report_);
+    maps_ = std::make_unique<MapsStage>(settings, inputs_.rig.probe_reflectance,
+                                        object.readsGlossy(glossyExponents(settings)), report_);
     lights_ = std::make_unique<LightsStage>(settings, inputs_.rig, inputs_.camera, *source_, report_, log_,
                                             options_.quiet);
     shadows_ = std::make_unique<ShadowsStage>(settings, object.shape, report_);

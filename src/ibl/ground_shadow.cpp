@@ -24,11 +24,13 @@ void basisAround(const glm::dvec3& d, glm::dvec3& a, glm::dvec3& b) {
 
 glm::dvec3 ShadowCaster::boundingCentre() const {
   if (shape == Shape::kSphere) return {position_w.x, position_w.y, radius_m};
+  if (shape == Shape::kMesh) return mesh_centre_w;
   return {position_w.x, position_w.y, 0.5 * box_size_m.z};
 }
 
 double ShadowCaster::boundingRadius() const {
   if (shape == Shape::kSphere) return radius_m;
+  if (shape == Shape::kMesh) return mesh_radius_m;
   return 0.5 * glm::length(box_size_m);
 }
 
@@ -43,6 +45,31 @@ std::optional<double> ShadowCaster::intersect(const glm::dvec3& origin, const gl
     if (-b - root > 0.0) return -b - root;
     if (-b + root > 0.0) return -b + root;
     return std::nullopt;
+  }
+  if (shape == Shape::kMesh) {
+    // The CPU reference only (the GPU renders the triangles): the bounding
+    // sphere first, then every triangle (Moller-Trumbore, both faces).
+    const glm::dvec3 oc = origin - mesh_centre_w;
+    const double b = glm::dot(oc, dir);
+    const double c = glm::dot(oc, oc) - mesh_radius_m * mesh_radius_m;
+    if (!(b * b - c >= 0.0) || (c > 0.0 && b > 0.0) || !mesh_triangles_w) return std::nullopt;
+    std::optional<double> nearest;
+    const std::vector<glm::vec3>& triangles = *mesh_triangles_w;
+    for (std::size_t i = 0; i + 2 < triangles.size(); i += 3) {
+      const glm::dvec3 a(triangles[i]), e1 = glm::dvec3(triangles[i + 1]) - a, e2 = glm::dvec3(triangles[i + 2]) - a;
+      const glm::dvec3 p = glm::cross(dir, e2);
+      const double det = glm::dot(e1, p);
+      if (std::abs(det) < 1e-300) continue;
+      const glm::dvec3 s = origin - a;
+      const double u = glm::dot(s, p) / det;
+      if (u < 0.0 || u > 1.0) continue;
+      const glm::dvec3 q = glm::cross(s, e1);
+      const double v = glm::dot(dir, q) / det;
+      if (v < 0.0 || u + v > 1.0) continue;
+      const double t = glm::dot(e2, q) / det;
+      if (t > 0.0 && (!nearest || t < *nearest)) nearest = t;
+    }
+    return nearest;
   }
   // Slabs in the box's own frame (turned by yaw about +Z, centred at its middle).
   const double c = std::cos(box_yaw_rad), s = std::sin(box_yaw_rad);

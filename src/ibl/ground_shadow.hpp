@@ -18,6 +18,7 @@
 // of its cone the object does not hide.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -29,12 +30,18 @@ namespace probelight::ibl {
 
 // A virtual object standing on the ground (z = 0) of W.
 struct ShadowCaster {
-  enum class Shape { kSphere, kBox };
+  enum class Shape { kSphere, kBox, kMesh };
   Shape shape = Shape::kSphere;
   glm::dvec2 position_w{0.0};               // where it stands
   double radius_m = 0.035;                  // sphere: centre at z = radius
   glm::dvec3 box_size_m{0.05, 0.05, 0.05};  // box: full edges along its own x, y, z; bottom face on the ground
   double box_yaw_rad = 0.0;                 // box: turned about +Z
+  // mesh: a user's model, placed: triangles in W (3 vertices each, as
+  // wound), and a sphere around them all (model::placedBoundingSphere).
+  // Shared, not copied: a model may have a million triangles.
+  std::shared_ptr<const std::vector<glm::vec3>> mesh_triangles_w;
+  glm::dvec3 mesh_centre_w{0.0};
+  double mesh_radius_m = 0.0;
 
   glm::dvec3 boundingCentre() const;
   double boundingRadius() const;

@@ -63,6 +63,8 @@ LightView lightViewFor(const glm::dvec3& direction_w, const glm::dvec3& centre_w
 }
 
 std::vector<glm::vec3> casterTriangles(const ibl::ShadowCaster& caster, int segments) {
+  if (caster.shape == ibl::ShadowCaster::Shape::kMesh)
+    return caster.mesh_triangles_w ? *caster.mesh_triangles_w : std::vector<glm::vec3>{};
   std::vector<glm::vec3> triangles;
   const glm::dvec3 centre = caster.boundingCentre();
   if (caster.shape == ibl::ShadowCaster::Shape::kSphere) {
@@ -270,12 +272,17 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   if (!ensureShadowMaps(lights.size(), error)) return false;
   region_ = ibl::groundShadowRegion(caster, lights, settings_.max_region_half_size_m);
 
-  const std::vector<glm::vec3> triangles = casterTriangles(caster);
-  glBindBuffer(GL_ARRAY_BUFFER, caster_vertices_.id());
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(triangles.size() * sizeof(glm::vec3)), triangles.data(),
-               GL_DYNAMIC_DRAW);
-  glBindBuffer(GL_ARRAY_BUFFER, 0);
-  caster_vertex_count_ = static_cast<GLsizei>(triangles.size());
+  const bool mesh = caster.shape == ibl::ShadowCaster::Shape::kMesh;
+  if (!mesh || caster.mesh_triangles_w != uploaded_mesh_) {
+    const std::vector<glm::vec3> built = mesh ? std::vector<glm::vec3>{} : casterTriangles(caster);
+    const std::vector<glm::vec3>& triangles = mesh && caster.mesh_triangles_w ? *caster.mesh_triangles_w : built;
+    glBindBuffer(GL_ARRAY_BUFFER, caster_vertices_.id());
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(triangles.size() * sizeof(glm::vec3)), triangles.data(),
+                 mesh ? GL_STATIC_DRAW : GL_DYNAMIC_DRAW);
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    caster_vertex_count_ = static_cast<GLsizei>(triangles.size());
+    uploaded_mesh_ = mesh ? caster.mesh_triangles_w : nullptr;
+  }
 
   // 1. One depth map per light.
   const glm::dvec3 centre = caster.boundingCentre();
@@ -299,7 +306,12 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   // seen from outside; the light's view is a right-handed camera looking
   // along -direction). That halves the triangles rasterised: 9 -> 4 ms for
   // 8 maps on llvmpipe.
-  glEnable(GL_CULL_FACE);
+  // A user's mesh need not be closed (a leaf, a sign): its faces are all
+  // kept, the depth test alone keeping the far side.
+  if (caster.shape == ibl::ShadowCaster::Shape::kMesh)
+    glDisable(GL_CULL_FACE);
+  else
+    glEnable(GL_CULL_FACE);
   glCullFace(GL_FRONT);
   glFrontFace(GL_CCW);
   for (std::size_t i = 0; i < lights.size(); ++i) {

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -92,6 +93,9 @@ class GroundShadow {
   gles::Framebuffer ground_framebuffer_;
   gles::Buffer caster_vertices_;
   GLsizei caster_vertex_count_ = 0;
+  // A mesh's triangles are uploaded once, not at every update (refits);
+  // held, so that no other mesh can take its address.
+  std::shared_ptr<const std::vector<glm::vec3>> uploaded_mesh_;
   gles::Buffer region_vertices_;
   // The grid cells the composite draws (darkeningCells of the last update).
   gles::Buffer region_indices_;
@@ -144,7 +148,8 @@ std::vector<bool> darkeningCells(const std::vector<glm::vec3>& fraction, int n, 
 
 // The object as triangles (3 vertices each), W metres: a sphere of
 // `segments` around (segments / 2 rings), or a box's 12 triangles; each
-// counter-clockwise seen from outside (the depth pass culls by it).
+// counter-clockwise seen from outside (the depth pass culls by it); a
+// mesh's own triangles.
 std::vector<glm::vec3> casterTriangles(const ibl::ShadowCaster& caster, int segments = 48);
 
 }  // namespace probelight::passes

@@ -359,17 +359,6 @@ const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_firs
   return &programs_.emplace(defines, std::move(*program)).first->second;
 }
 
-bool ModelRenderer::needsGlossy(const std::vector<double>& glossy_exponents) const {
-  if (glossy_exponents.empty()) return false;
-  const std::vector<double> alphas = ibl::specularRungAlphas(glossy_exponents);
-  const int diffuse_rung = static_cast<int>(alphas.size()) - 1;
-  for (const MaterialState& state : materials_) {
-    const ibl::RungRange range = ibl::specularRungRange(state.min_roughness, state.max_roughness, alphas);
-    if (range.first < diffuse_rung && range.last > 0) return true;
-  }
-  return false;
-}
-
 bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                          const ibl::SceneLighting& lighting, EnvironmentMaps& environment, std::string& error) {
   if (environment.storage() != storage_) {

@@ -16,7 +16,8 @@
 // sets, its vertex colours, its alpha mode, double-sidedness, and the span of
 // the specular ladder (mirror, glossy maps, diffuse) its roughness can reach
 // over its texture, so a matte material reads no mirror map and a mirror no
-// glossy one (needsGlossy tells the maps stage whether to make them at all).
+// glossy one (stages/scene_object.hpp's modelReadsGlossy tells the maps
+// stage whether to make them at all).
 //
 // Order: opaque and masked primitives first, then blended ones back to
 // front (by their centres, from the eye), without depth writes. Blending is
@@ -70,10 +71,6 @@ class ModelRenderer {
  public:
   bool init(const gles::Capabilities& capabilities, CubeStorage storage, const model::MeshModel& model,
             const glm::dmat4& world_from_model, const ModelRendererSettings& settings, std::string& error);
-
-  // Whether some material's roughness reaches a glossy rung of a ladder
-  // with these glossy maps (sharpest first).
-  bool needsGlossy(const std::vector<double>& glossy_exponents) const;
 
   // Draws the model into the bound framebuffer (whose viewport covers the
   // camera image), depth-tested against what is there. Uses the glossy maps

@@ -35,6 +35,25 @@ Status ComposeStage::init(const gles::Capabilities& capabilities, passes::CubeSt
   std::string error;
   if (!compositor_.init(capabilities, passes::ObjectCompositorSettings{}, storage, error))
     return Status::runtimeFailure("GPU set-up failed: " + error);
+  if (object_.isModel()) {
+    if (!model_renderer_.init(capabilities, storage, *object_.model, object_.world_from_model, {}, error))
+      return Status::runtimeFailure("GPU set-up failed for " + object_.model->source + ": " + error);
+    const passes::ModelUploadStats& stats = model_renderer_.stats();
+    nlohmann::json& out = report_.extra["model"];
+    out["file"] = object_.model->source;
+    out["triangles"] = stats.triangles;
+    out["draws"] = stats.draw_pieces;
+    out["split_for_16_bit_indices"] = stats.split_pieces;
+    out["textures"] = stats.textures;
+    out["texture_bytes"] = stats.texture_bytes;
+    out["vertex_bytes"] = stats.vertex_bytes;
+    out["index_bytes"] = stats.index_bytes;
+    out["load_ms"] = object_.model->load_ms;
+    out["upload_ms"] = stats.upload_ms;
+    nlohmann::json warnings = object_.model->warnings;
+    for (const std::string& warning : model_renderer_.warnings()) warnings.push_back(warning);
+    out["warnings"] = warnings;
+  }
   return Status::ok();
 }
 
@@ -48,7 +67,8 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
     // The shadow first: the object then covers the part of it under itself.
     if (!shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error)) return Status::runtimeFailure(error);
     const bool drawn =
-        mesh_.empty()
+        object_.isModel() ? model_renderer_.draw(camera_, track.pose, lighting, maps.maps(), error)
+        : mesh_.empty()
             ? compositor_.drawSphereObject(camera_, track.pose, object_.shape.boundingCentre(), object_.shape.radius_m,
                                            object_.material, lighting, maps.maps(), error)
             : compositor_.drawMeshObject(camera_, track.pose, mesh_, object_.material, lighting, maps.maps(), error);

@@ -14,20 +14,15 @@
 #include "ibl/ground_shadow.hpp"
 #include "ibl/surface_shading.hpp"
 #include "passes/camera_frame_texture.hpp"
+#include "passes/model_renderer.hpp"
 #include "passes/object_compositor.hpp"
 #include "stages/maps_stage.hpp"
 #include "stages/run_report.hpp"
+#include "stages/scene_object.hpp"
 #include "stages/shadows_stage.hpp"
 #include "tracking/tag_tracker.hpp"
 
 namespace probelight {
-
-// The virtual object: its shape and where it stands (a sphere or a box on
-// the ground of W; the same description casts its shadow), and its material.
-struct SceneObject {
-  ibl::ShadowCaster shape;
-  ibl::SurfaceMaterial material;
-};
 
 // Status text drawn over the frame with OpenCV's Hershey font, re-rendered
 // only when the text changes.
@@ -63,6 +58,7 @@ class ComposeStage {
   RunReport& report_;
   bool finish_gpu_;
   passes::ObjectCompositor compositor_;
+  passes::ModelRenderer model_renderer_;  // for a model
   std::vector<passes::ObjectCompositor::MeshVertex> mesh_;  // a box's triangles (empty for a sphere)
   StatusOverlay overlay_;
 };

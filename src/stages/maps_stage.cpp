@@ -24,11 +24,11 @@ const char* statusFor(MapSkipReason skip) {
 
 }  // namespace
 
-MapsStage::MapsStage(const PipelineSettings& settings, double probe_reflectance, const ibl::SurfaceMaterial& material,
+MapsStage::MapsStage(const PipelineSettings& settings, double probe_reflectance, bool object_reads_glossy,
                      RunReport& report)
     : settings_(settings),
       probe_reflectance_(probe_reflectance),
-      material_(material),
+      object_reads_glossy_(object_reads_glossy),
       report_(report),
       policy_(settings.map_updates) {}
 
@@ -93,7 +93,7 @@ Status MapsStage::remake(const ibl::MirrorBallView& view, const passes::CameraFr
   }
   // Glossy levels only when the object's material sits between them (a
   // mirror or a matte object never reads them).
-  if (ibl::needsGlossy(material_)) {
+  if (object_reads_glossy_) {
     GpuStageTimer timer(report_, kGlossyStageName, finish_gpu);
     if (!maps_.updateGlossy(error)) return Status::runtimeFailure(error);
   }

@@ -30,8 +30,9 @@ class MapsStage {
   static constexpr const char* kReflectionStageName = "probe_to_cube";
   static constexpr const char* kGlossyStageName = "glossy";
 
-  MapsStage(const PipelineSettings& settings, double probe_reflectance, const ibl::SurfaceMaterial& material,
-            RunReport& report);
+  // object_reads_glossy: whether the object's material reads a glossy map
+  // (SceneObject::readsGlossy): they are made only then.
+  MapsStage(const PipelineSettings& settings, double probe_reflectance, bool object_reads_glossy, RunReport& report);
   Status init(const gles::Capabilities& capabilities);
 
   // Decides, and remakes the maps from `frame` (this frame's upload) when the
@@ -62,7 +63,7 @@ class MapsStage {
 
   const PipelineSettings& settings_;
   double probe_reflectance_;
-  ibl::SurfaceMaterial material_;
+  bool object_reads_glossy_;
   RunReport& report_;
   passes::EnvironmentMaps maps_;
   MapUpdatePolicy policy_;

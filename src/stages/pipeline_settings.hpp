@@ -98,6 +98,13 @@ struct ObjectConfig {
   // 1: the reflection term is a mirror; 0: it reads the diffuse map; between,
   // it blends the glossy levels (src/ibl/surface_shading.hpp).
   double glossiness = 1.0;
+  // A glTF 2.0 model (.gltf or .glb) instead of the sphere, with its own
+  // materials: standing at position_w, turned by yaw_deg about +Z and
+  // scaled, its lowest point on the ground (model/model_placement.hpp).
+  // Relative paths are the config file's directory's.
+  std::string model_path;
+  double yaw_deg = 0.0;
+  double scale = 1.0;
 };
 
 // The board's camera (--source libcamera); its size is camera.yaml's.

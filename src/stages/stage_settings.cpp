@@ -30,6 +30,14 @@ passes::EnvironmentMapSettings environmentMapSettings(const PipelineSettings& se
   return stages;
 }
 
+std::vector<double> glossyExponents(const PipelineSettings& settings) {
+  const passes::EnvironmentMapSettings maps = environmentMapSettings(settings);
+  std::vector<double> exponents;
+  for (int level = 0; level < std::clamp(maps.glossy_levels, 0, 2); ++level)
+    exponents.push_back(maps.glossy_exponent[static_cast<size_t>(level)]);
+  return exponents;
+}
+
 ibl::SurfaceMaterial objectMaterial(const PipelineSettings& settings) {
   ibl::SurfaceMaterial material;
   material.albedo = glm::vec3(settings.object.albedo);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <optional>
+#include <vector>
 
 #include "stages/pipeline_settings.hpp"
 #include "core/types.hpp"
@@ -24,6 +25,9 @@ tracking::TagDetectorSettings tagDetectorSettings(const PipelineSettings& settin
 // here: it changes the capabilities the stages are given, not their settings).
 // Glossy maps are allocated only when the object's material reads them.
 passes::EnvironmentMapSettings environmentMapSettings(const PipelineSettings& settings);
+
+// The exponents of the glossy levels the maps are configured with (sharpest first).
+std::vector<double> glossyExponents(const PipelineSettings& settings);
 
 // The `object` section as the shading takes it.
 ibl::SurfaceMaterial objectMaterial(const PipelineSettings& settings);

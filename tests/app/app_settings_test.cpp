@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 
 #include "app/app_settings.hpp"
@@ -29,6 +30,9 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_DOUBLE_EQ(from_file.maps.stages.camera_transfer.gamma, defaults.maps.stages.camera_transfer.gamma);
   EXPECT_EQ(from_file.maps.stages.glossy_levels, defaults.maps.stages.glossy_levels);
   EXPECT_DOUBLE_EQ(from_file.object.glossiness, defaults.object.glossiness);
+  EXPECT_EQ(from_file.object.model_path, defaults.object.model_path);
+  EXPECT_DOUBLE_EQ(from_file.object.yaw_deg, defaults.object.yaw_deg);
+  EXPECT_DOUBLE_EQ(from_file.object.scale, defaults.object.scale);
   EXPECT_EQ(from_file.maps.force_8bit, defaults.maps.force_8bit);
   EXPECT_DOUBLE_EQ(from_file.tracking.quad_decimate, defaults.tracking.quad_decimate);
   EXPECT_EQ(from_file.tracking.threads, defaults.tracking.threads);
@@ -121,6 +125,27 @@ TEST(AppSettings, PartialFileChangesOnlyWhatItLists) {
   EXPECT_EQ(settings.maps.stages.reflection_face_size, 128);
   EXPECT_EQ(settings.sim.lamp_on_frame, 30);
   EXPECT_EQ(settings.maps.stages.diffuse_face_size, AppSettings{}.maps.stages.diffuse_face_size);
+}
+
+// A model named relative to the config is found next to it, wherever the
+// program runs from (the service runs in /); an absolute path stays.
+TEST(AppSettings, ModelPathsAreRelativeToTheConfigFile) {
+  const std::string dir = ::testing::TempDir() + "/model_config";
+  std::filesystem::create_directories(dir);
+  for (const auto& [given, expected] :
+       {std::pair<std::string, std::string>{"models/statue.glb", dir + "/models/statue.glb"},
+        {"/srv/models/statue.glb", "/srv/models/statue.glb"}}) {
+    const std::string path = dir + "/probelight.yaml";
+    FILE* file = std::fopen(path.c_str(), "w");
+    ASSERT_NE(file, nullptr);
+    std::fprintf(file, "object:\n  model: \"%s\"\n  yaw: 30\n  scale: 0.05\n", given.c_str());
+    std::fclose(file);
+    const AppSettings settings = loadAppSettings(path);
+    EXPECT_EQ(std::filesystem::path(settings.object.model_path).lexically_normal(),
+              std::filesystem::path(expected).lexically_normal());
+    EXPECT_DOUBLE_EQ(settings.object.yaw_deg, 30.0);
+    EXPECT_DOUBLE_EQ(settings.object.scale, 0.05);
+  }
 }
 
 TEST(AppSettings, ObjectMustRestOnTheGround) {

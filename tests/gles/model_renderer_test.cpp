@@ -383,25 +383,6 @@ TEST(ModelTextures, RoughnessRangeSpansTheTexturesGreenChannelTimesTheFactor) {
   EXPECT_NEAR(hi, 0.4f, 1e-6f);
 }
 
-// A mirror-smooth or matte model never makes the maps stage build glossy
-// maps; roughness between the mirror and the diffuse rung does.
-TEST_F(GpuTest, GlossyMapsAreNeededOnlyForRoughnessBetweenMirrorAndMatte) {
-  ModelStage stage;
-  ASSERT_NO_FATAL_FAILURE(initStage(stage, test::sharedCapabilities()));
-  const std::vector<double> exponents{128.0, 16.0};
-  for (const auto& [roughness, needed] : {std::pair{0.0f, false}, {1.0f, false}, {0.3f, true}, {0.5f, true}}) {
-    model::Material material;
-    material.roughness_factor = roughness;
-    passes::ModelRenderer renderer;
-    std::string error;
-    ASSERT_TRUE(renderer.init(test::sharedCapabilities(), stage.maps.storage(), texturedQuad(material, false),
-                              glm::dmat4(1.0), {}, error))
-        << error;
-    EXPECT_EQ(renderer.needsGlossy(exponents), needed) << roughness;
-    EXPECT_FALSE(renderer.needsGlossy({})) << roughness;
-  }
-}
-
 // The corpus's valid models upload and draw, over a real placement, with no
 // GL error; BoxTextured's logo shows (its pixels are not one flat colour per
 // face), and the power-of-two path (boards without OES_texture_npot) draws
@@ -411,9 +392,10 @@ TEST_F(GpuTest, CorpusModelsDrawOnTheTag) {
   ModelStage stage;
   stage.pose = test::lookAt({0.12, -0.30, 0.22}, {0.0, 0.0, 0.03});
   ASSERT_NO_FATAL_FAILURE(initStage(stage, test::sharedCapabilities()));
-  for (const std::string& file :
+  for (const char* name :
        {"BoxTextured-glTF/BoxTextured.gltf", "BoxTextured-glTF-Binary/BoxTextured.glb",
         "2CylinderEngine-glTF-Binary/2CylinderEngine.glb", "textureTransform/TextureTransformTest.gltf"}) {
+    const std::string file = name;
     model::MeshModel model;
     std::string error;
     ASSERT_TRUE(model::loadGltfModel(corpus + file, {}, model, error)) << error;
