@@ -18,6 +18,7 @@
 // of the rung alphas, constants at least 0.06 apart.
 #include "color_transfer.glsl"
 #include "cube_storage.glsl"
+#include "depth_packing.glsl"
 
 #ifndef GLOSSY_LEVELS
 #define GLOSSY_LEVELS 0
@@ -102,6 +103,65 @@ uniform mat3 u_occlusion_uv_transform;
 #ifdef EMISSIVE_TEXTURE
 uniform sampler2D u_emissive_texture;
 uniform mat3 u_emissive_uv_transform;
+#endif
+
+#ifdef SELF_SHADOW_LIGHTS
+// The object's shadow on itself, in the ratio form the ground's shadow uses
+// (ibl/ground_shadow.hpp): the dome's lights carry the maps' energy, so the
+// share of the diffuse light a point loses is what its hidden lights gave,
+//   visibility = 1 - sum_i C_i max(0, n.L_i) (1 - V_i) / (pi D(n)),
+// per channel, with V_i the lit share of a 2x2 percentage-closer test in
+// light i's map of the object's near side (passes/ground_shadow.hpp:
+// SelfShadowLight). Light from below the horizon (the floor) is in D(n)
+// but in no dome light, so it is never hidden: the floor's bounce under a
+// model stays. Where the dome and the maps disagree the ratio is clamped
+// to [0, 1]. The lights' cones are not spread here: a self-shadow's edge
+// is the map's texel, softened by the 2x2 test.
+varying vec3 v_position_w;
+uniform sampler2D u_self_shadow_map[SELF_SHADOW_LIGHTS];
+// Rows of the light's clip_from_world folded into [0, 1]: uv.x, uv.y, depth01.
+uniform vec4 u_self_shadow_row0[SELF_SHADOW_LIGHTS];
+uniform vec4 u_self_shadow_row1[SELF_SHADOW_LIGHTS];
+uniform vec4 u_self_shadow_row2[SELF_SHADOW_LIGHTS];
+uniform vec3 u_self_shadow_direction[SELF_SHADOW_LIGHTS];
+uniform vec3 u_self_shadow_rgb[SELF_SHADOW_LIGHTS];
+// x: one texel in uv; y: one texel's width in depth01 (width / depth / size).
+uniform vec2 u_self_shadow_texel[SELF_SHADOW_LIGHTS];
+
+float nearDepth(sampler2D map, vec2 uv) {
+#ifdef SHADOW_DEPTH_PACKED
+  return unpackDepth(texture2D(map, uv));
+#else
+  return texture2D(map, uv).r;
+#endif
+}
+
+vec3 selfShadowVisibility(vec3 position, vec3 surface_normal, vec3 n, vec3 diffuse) {
+  vec3 hidden = vec3(0.0);
+  vec4 p = vec4(position, 1.0);
+  for (int i = 0; i < SELF_SHADOW_LIGHTS; ++i) {
+    vec3 l = u_self_shadow_direction[i];
+    float cos_shading = dot(n, l);
+    if (cos_shading <= 0.0) continue;
+    vec2 uv = vec2(dot(u_self_shadow_row0[i], p), dot(u_self_shadow_row1[i], p));
+    float depth = dot(u_self_shadow_row2[i], p);
+    // Slope-scaled bias: across one texel the surface's own depth changes by
+    // the texel's width times tan(angle to the light); 1.5 of that plus 1.5
+    // texels keeps a lit surface from shadowing itself (acne) while a real
+    // occluder further than two texels still shadows.
+    float cos_surface = max(dot(surface_normal, l), 0.05);
+    float tan_surface = min(sqrt(1.0 - cos_surface * cos_surface) / cos_surface, 8.0);
+    float bias = (1.5 + 1.5 * tan_surface) * u_self_shadow_texel[i].y;
+    float half_texel = 0.5 * u_self_shadow_texel[i].x;
+    float lit = 0.0;
+    lit += nearDepth(u_self_shadow_map[i], uv + vec2(-half_texel, -half_texel)) + bias >= depth ? 0.25 : 0.0;
+    lit += nearDepth(u_self_shadow_map[i], uv + vec2(half_texel, -half_texel)) + bias >= depth ? 0.25 : 0.0;
+    lit += nearDepth(u_self_shadow_map[i], uv + vec2(-half_texel, half_texel)) + bias >= depth ? 0.25 : 0.0;
+    lit += nearDepth(u_self_shadow_map[i], uv + vec2(half_texel, half_texel)) + bias >= depth ? 0.25 : 0.0;
+    hidden += u_self_shadow_rgb[i] * cos_shading * (1.0 - lit);
+  }
+  return clamp(1.0 - hidden / max(3.14159265 * diffuse, vec3(1e-4)), 0.0, 1.0);
+}
 #endif
 
 vec2 transformUv(mat3 transform, vec2 uv) { return (transform * vec3(uv, 1.0)).xy; }
@@ -205,6 +265,14 @@ void main() {
 #ifdef EMISSIVE_TEXTURE
   emissive *= srgbToLinear(texture2D(u_emissive_texture, transformUv(u_emissive_uv_transform, EMISSIVE_UV)).rgb);
 #endif
+#ifdef SELF_SHADOW_LIGHTS
+  // The specular light is hidden as much as the diffuse (the lights' lobes
+  // about the reflection are not resolved): a common approximation, and
+  // the one that keeps a shadowed crevice from showing the sky in a metal.
+  vec3 visibility = selfShadowVisibility(v_position_w, normalize(v_normal_w), n, diffuse);
+  vec3 color = occlusion * visibility * (c_diff * (1.0 - specular_reflectance) * diffuse + specular_reflectance * specular) + emissive;
+#else
   vec3 color = occlusion * (c_diff * (1.0 - specular_reflectance) * diffuse + specular_reflectance * specular) + emissive;
+#endif
   gl_FragColor = vec4(linearToSrgb(color), alpha);
 }

@@ -36,6 +36,9 @@ uniform vec2 u_depth_range_m;  // near, far
 
 varying vec3 v_normal_w;
 varying vec3 v_to_eye_w;
+#ifdef SELF_SHADOW_LIGHTS
+varying vec3 v_position_w;
+#endif
 
 void main() {
   vec3 position_cam = u_rotation_cam_from_world * a_position_w + u_translation_cam_from_world;
@@ -47,6 +50,9 @@ void main() {
   gl_Position = vec4(ndc * z, depth_ndc * z, z);
   v_normal_w = a_normal_w;
   v_to_eye_w = u_eye_w - a_position_w;
+#ifdef SELF_SHADOW_LIGHTS
+  v_position_w = a_position_w;
+#endif
 #ifdef HAS_TANGENT
   v_tangent_w = a_tangent_w;
 #endif

@@ -47,6 +47,7 @@ Capabilities probeCapabilities() {
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &caps.max_texture_size_px);
   glGetIntegerv(GL_MAX_CUBE_MAP_TEXTURE_SIZE, &caps.max_cube_map_size_px);
   glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &caps.max_fragment_texture_units);
+  glGetIntegerv(GL_MAX_FRAGMENT_UNIFORM_VECTORS, &caps.max_fragment_uniform_vectors);
   caps.renderer = glString(GL_RENDERER);
   caps.version = glString(GL_VERSION);
   return caps;
@@ -58,6 +59,7 @@ Capabilities Capabilities::withoutExtensions() const {
   plain.max_texture_size_px = max_texture_size_px;
   plain.max_cube_map_size_px = max_cube_map_size_px;
   plain.max_fragment_texture_units = std::min(8, max_fragment_texture_units);
+  plain.max_fragment_uniform_vectors = max_fragment_uniform_vectors;
   plain.renderer = renderer + " [extensions masked]";
   plain.version = version;
   return plain;
@@ -68,7 +70,8 @@ std::string Capabilities::summary() const {
                      (fragment_highp ? std::to_string(fragment_highp_mantissa_bits) + " bits" : std::string("no")) +
                      ", mediump " + std::to_string(fragment_mediump_mantissa_bits) + " bits | max tex " +
                      std::to_string(max_texture_size_px) + ", cube " + std::to_string(max_cube_map_size_px) + ", units " +
-                     std::to_string(max_fragment_texture_units) + " |";
+                     std::to_string(max_fragment_texture_units) + ", frag uniforms " +
+                     std::to_string(max_fragment_uniform_vectors) + " |";
   auto flag = [&text](bool on, const char* name) {
     text += on ? " +" : " -";
     text += name;

@@ -26,6 +26,7 @@ struct Capabilities {
   int max_texture_size_px = 0;
   int max_cube_map_size_px = 0;
   int max_fragment_texture_units = 8;      // GL_MAX_TEXTURE_IMAGE_UNITS; GLES2 guarantees 8
+  int max_fragment_uniform_vectors = 16;   // GL_MAX_FRAGMENT_UNIFORM_VECTORS; GLES2 guarantees 16
   std::string renderer;  // GL_RENDERER
   std::string version;   // GL_VERSION
 

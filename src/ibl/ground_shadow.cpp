@@ -112,6 +112,7 @@ std::vector<ShadowLight> groundShadowLights(const std::vector<DomeLight>& dome, 
     if (!finiteVector(light.rgb) || !finiteVector(light.direction_w) || !(light.direction_w.z > 0.0)) continue;
     ShadowLight shadow;
     shadow.direction_w = glm::normalize(light.direction_w);
+    shadow.rgb = glm::max(light.rgb, glm::dvec3(0.0));
     for (int c = 0; c < 3; ++c)
       shadow.share_rgb[c] = total[c] > 0.0 ? std::max(0.0, light.rgb[c]) * light.direction_w.z / total[c] : 0.0;
     if (!(std::max({shadow.share_rgb.r, shadow.share_rgb.g, shadow.share_rgb.b}) >= min_share)) continue;

@@ -54,6 +54,7 @@ struct ShadowLight {
   glm::dvec3 direction_w{0.0, 0.0, 1.0};
   glm::dvec3 share_rgb{0.0};  // C_i (N . L_i) / E per channel: its share of the ground's irradiance
   double cone_radius_rad = 0.0;
+  glm::dvec3 rgb{0.0};  // C_i: the dome light's irradiance at normal incidence (the object's self-shadow weighs by it)
 };
 
 // The dome's lights that can darken the ground: above the horizon, and with

@@ -212,9 +212,22 @@ std::string GroundShadow::depthStorageDescription() const {
 }
 
 bool GroundShadow::ensureShadowMaps(std::size_t count, std::string& error) {
-  const int size = settings_.shadow_map_size_px;
   while (shadow_maps_.size() < count) {
     ShadowMap map;
+    if (!allocateShadowMap(map, error)) return false;
+    shadow_maps_.push_back(std::move(map));
+  }
+  while (settings_.self_shadow_maps && near_maps_.size() < count) {
+    ShadowMap map;
+    if (!allocateShadowMap(map, error)) return false;
+    near_maps_.push_back(std::move(map));
+  }
+  return true;
+}
+
+bool GroundShadow::allocateShadowMap(ShadowMap& map, std::string& error) {
+  const int size = settings_.shadow_map_size_px;
+  {
     map.framebuffer = gles::Framebuffer::create();
     if (packed_depth_) {
       auto colour = gles::createTexture2D(size, size, GL_RGBA, GL_UNSIGNED_BYTE, GL_NEAREST, nullptr, error);
@@ -246,7 +259,6 @@ bool GroundShadow::ensureShadowMaps(std::size_t count, std::string& error) {
       return false;
     }
     if (!gles::checkGl("shadow map allocation", error)) return false;
-    shadow_maps_.push_back(std::move(map));
   }
   return true;
 }
@@ -268,6 +280,7 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
                           std::string& error) {
   shadow_passes_last_update_ = 0;
   has_shadow_ = false;
+  self_shadow_lights_.clear();
   if (lights.empty()) return true;
   if (!ensureShadowMaps(lights.size(), error)) return false;
   region_ = ibl::groundShadowRegion(caster, lights, settings_.max_region_half_size_m);
@@ -323,6 +336,37 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     if (!drawCasterDepth(glm::mat4(views.back().clip_from_world), error)) return false;
     ++shadow_passes_last_update_;
+  }
+  // 1b. The near side, for the object's shadow on itself: the surface
+  // nearest the light (depth test LESS over a map cleared to 1). The faces
+  // away from the light are culled for a closed shape; a mesh keeps all.
+  self_shadow_lights_.clear();
+  if (settings_.self_shadow_maps) {
+    glDepthFunc(GL_LESS);
+    glCullFace(GL_BACK);
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+      glBindFramebuffer(GL_FRAMEBUFFER, near_maps_[i].framebuffer.id());
+      glViewport(0, 0, size, size);
+      glClearColor(1.0f, 1.0f, 0.0f, 1.0f);  // packed: packDepth(1), "empty"
+      glClearDepthf(1.0f);
+      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+      if (!drawCasterDepth(glm::mat4(views[i].clip_from_world), error)) return false;
+      ++shadow_passes_last_update_;
+      SelfShadowLight light;
+      light.map = near_maps_[i].depth_or_colour.id();
+      light.clip_from_world = glm::mat4(views[i].clip_from_world);
+      light.direction_w = glm::vec3(lights[i].direction_w);
+      light.rgb = glm::vec3(lights[i].rgb);
+      light.depth_range_m = static_cast<float>(views[i].depth_m);
+      light.width_m = static_cast<float>(views[i].width_m);
+      self_shadow_lights_.push_back(light);
+    }
+    glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    // Strongest first: a GPU with fewer texture units reads the first ones.
+    std::stable_sort(self_shadow_lights_.begin(), self_shadow_lights_.end(),
+                     [](const SelfShadowLight& a, const SelfShadowLight& b) {
+                       return a.rgb.r + a.rgb.g + a.rgb.b > b.rgb.r + b.rgb.g + b.rgb.b;
+                     });
   }
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);

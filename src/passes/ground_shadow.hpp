@@ -41,7 +41,23 @@ struct GroundShadowSettings {
   // distortion, and only its cells that the shadow darkens are drawn.
   int region_mesh_segments = 32;
   bool force_packed_depth = false;    // use the RGBA8 path even with OES_depth_texture (tests, comparison)
+  // Also keep each light's map of the object's near side, for the object's
+  // shadow on itself (a model's self-shadowing; SelfShadowLight).
+  bool self_shadow_maps = false;
   ibl::CameraTransfer camera_transfer;  // how the camera's bytes decode to light
+};
+
+// One dome light as the object's shader reads it for its shadow on itself:
+// the map of the object's near side seen from the light (depth 0 at the
+// light's end of its frustum, cleared to 1 where the object is absent),
+// and where a point of W falls in it.
+struct SelfShadowLight {
+  GLuint map = 0;                  // NEAREST; packed RGBA8 depth or a depth texture, as the ground's maps
+  glm::mat4 clip_from_world{1.0f};  // LightView::clip_from_world
+  glm::vec3 direction_w{0.0f, 0.0f, 1.0f};
+  glm::vec3 rgb{0.0f};              // C_i, the dome light's irradiance at normal incidence
+  float depth_range_m = 0.0f;       // the frustum's depth
+  float width_m = 0.0f;             // and width
 };
 
 class GroundShadow {
@@ -62,6 +78,10 @@ class GroundShadow {
                          const CameraFrameTexture& camera_frame, std::string& error);
 
   bool hasShadow() const { return has_shadow_; }
+  // The lights of the last update with their near-side maps (empty unless
+  // settings.self_shadow_maps), strongest first.
+  const std::vector<SelfShadowLight>& selfShadowLights() const { return self_shadow_lights_; }
+  int shadowMapSizePx() const { return settings_.shadow_map_size_px; }
   const ibl::GroundRegion& region() const { return region_; }
   int shadowPassesLastUpdate() const { return shadow_passes_last_update_; }
   bool packedDepth() const { return packed_depth_; }
@@ -80,6 +100,7 @@ class GroundShadow {
     gles::Framebuffer framebuffer;
   };
   bool ensureShadowMaps(std::size_t count, std::string& error);
+  bool allocateShadowMap(ShadowMap& map, std::string& error);
   bool drawCasterDepth(const glm::mat4& light_clip_from_world, std::string& error);
 
   GroundShadowSettings settings_;
@@ -89,6 +110,8 @@ class GroundShadow {
   gles::Program composite_program_;
   gles::Buffer footprint_vertices_;  // one light's shadowFootprintNdc
   std::vector<ShadowMap> shadow_maps_;
+  std::vector<ShadowMap> near_maps_;  // self_shadow_maps: the object's near side
+  std::vector<SelfShadowLight> self_shadow_lights_;
   gles::Texture ground_texture_;
   gles::Framebuffer ground_framebuffer_;
   gles::Buffer caster_vertices_;

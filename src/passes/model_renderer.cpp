@@ -168,7 +168,7 @@ bool ModelRenderer::init(const gles::Capabilities& capabilities, CubeStorage sto
   // Every piece's program with the mirror-only ladder now, so a shader that
   // does not build fails here, not mid-run.
   for (const Piece& piece : pieces_)
-    if (programFor(piece, 0, 0, 0, error) == nullptr) return false;
+    if (programFor(piece, 0, 0, 0, 0, error) == nullptr) return false;
   stats_.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return gles::checkGl("ModelRenderer::init", error);
 }
@@ -349,14 +349,24 @@ bool ModelRenderer::uploadPrimitive(const model::Primitive& source, std::size_t 
 }
 
 const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
-                                               std::string& error) {
-  const std::string defines = cubeStorageDefines(storage_) + piece.defines + "#define GLOSSY_LEVELS " +
-                              std::to_string(glossy_levels) + "\n#define RUNG_FIRST " + std::to_string(rung_first) +
-                              "\n#define RUNG_LAST " + std::to_string(rung_last) + "\n";
+                                               int self_shadow_lights, std::string& error) {
+  std::string defines = cubeStorageDefines(storage_) + piece.defines + "#define GLOSSY_LEVELS " +
+                        std::to_string(glossy_levels) + "\n#define RUNG_FIRST " + std::to_string(rung_first) +
+                        "\n#define RUNG_LAST " + std::to_string(rung_last) + "\n";
+  if (self_shadow_lights > 0) {
+    defines += "#define SELF_SHADOW_LIGHTS " + std::to_string(self_shadow_lights) + "\n";
+    if (self_shadow_packed_) defines += "#define SHADOW_DEPTH_PACKED\n";
+  }
   if (auto found = programs_.find(defines); found != programs_.end()) return &found->second;
   auto program = gles::Program::fromEmbedded("model_object.vert", "model_object.frag", defines, error);
   if (!program) return nullptr;
   return &programs_.emplace(defines, std::move(*program)).first->second;
+}
+
+void ModelRenderer::setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth) {
+  self_shadow_ = lights;
+  self_shadow_map_size_px_ = map_size_px;
+  self_shadow_packed_ = packed_depth;
 }
 
 bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
@@ -409,7 +419,19 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
   const model::Material& material = state.material;
   const ibl::RungRange range = ibl::specularRungRange(state.min_roughness, state.max_roughness, rung_alphas);
   const int glossy_levels = static_cast<int>(rung_alphas.size()) - 2;
-  const gles::Program* found = programFor(piece, range.first, range.last, glossy_levels, error);
+  // Self-shadow lights: what the units left (diffuse, the rungs, the BRDF
+  // table and the textures come first) and the fragment uniforms allow
+  // (6 vectors a light; the rest of the shader uses under 48).
+  int units_used = 2;  // the diffuse map and the BRDF table
+  for (int rung = range.first; rung <= range.last; ++rung) units_used += rung < glossy_levels + 1 ? 1 : 0;
+  for (bool used : piece.slot_used) units_used += used ? 1 : 0;
+  int self_shadow_lights = 0;
+  if (self_shadow_ != nullptr && self_shadow_map_size_px_ > 0)
+    self_shadow_lights = std::max(0, std::min({static_cast<int>(self_shadow_->size()),
+                                               capabilities_.max_fragment_texture_units - units_used,
+                                               (capabilities_.max_fragment_uniform_vectors - 48) / 6}));
+  self_shadow_lights_read_ = self_shadow_lights;
+  const gles::Program* found = programFor(piece, range.first, range.last, glossy_levels, self_shadow_lights, error);
   if (found == nullptr) return false;
   const gles::Program& program = *found;
   program.use();
@@ -436,6 +458,37 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
     glUniform1i(program.uniform((prefix + "_texture").c_str()), unit++);
     const glm::mat3 transform = textureTransformMatrix(slotOf(material, slot));
     glUniformMatrix3fv(program.uniform((prefix + "_uv_transform").c_str()), 1, GL_FALSE, glm::value_ptr(transform));
+  }
+  if (self_shadow_lights > 0) {
+    std::vector<GLint> units;
+    std::vector<glm::vec4> row0, row1, row2;
+    std::vector<glm::vec3> directions, rgb;
+    std::vector<glm::vec2> texels;
+    for (int i = 0; i < self_shadow_lights; ++i) {
+      const SelfShadowLight& light = (*self_shadow_)[static_cast<size_t>(i)];
+      glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
+      glBindTexture(GL_TEXTURE_2D, light.map);
+      units.push_back(unit++);
+      // uv = 0.5 clip.xy + 0.5 and depth01 = 0.5 clip.z + 0.5 (orthographic: w = 1).
+      const glm::mat4 m = light.clip_from_world;
+      auto row = [&](int r) { return glm::vec4(m[0][r], m[1][r], m[2][r], m[3][r]); };
+      const glm::vec4 half_w(0.0f, 0.0f, 0.0f, 0.5f);
+      row0.push_back(0.5f * row(0) + half_w);
+      row1.push_back(0.5f * row(1) + half_w);
+      row2.push_back(0.5f * row(2) + half_w);
+      directions.push_back(light.direction_w);
+      rgb.push_back(light.rgb);
+      const float texel_uv = 1.0f / static_cast<float>(self_shadow_map_size_px_);
+      texels.emplace_back(texel_uv, light.depth_range_m > 0.0f ? light.width_m * texel_uv / light.depth_range_m : 0.0f);
+    }
+    const GLsizei n = self_shadow_lights;
+    glUniform1iv(program.uniform("u_self_shadow_map"), n, units.data());
+    glUniform4fv(program.uniform("u_self_shadow_row0"), n, glm::value_ptr(row0[0]));
+    glUniform4fv(program.uniform("u_self_shadow_row1"), n, glm::value_ptr(row1[0]));
+    glUniform4fv(program.uniform("u_self_shadow_row2"), n, glm::value_ptr(row2[0]));
+    glUniform3fv(program.uniform("u_self_shadow_direction"), n, glm::value_ptr(directions[0]));
+    glUniform3fv(program.uniform("u_self_shadow_rgb"), n, glm::value_ptr(rgb[0]));
+    glUniform2fv(program.uniform("u_self_shadow_texel"), n, glm::value_ptr(texels[0]));
   }
   glActiveTexture(GL_TEXTURE0);
 

@@ -40,6 +40,7 @@
 #include "ibl/surface_shading.hpp"
 #include "model/mesh_model.hpp"
 #include "passes/environment_maps.hpp"
+#include "passes/ground_shadow.hpp"
 
 namespace probelight::passes {
 
@@ -78,6 +79,13 @@ class ModelRenderer {
   bool draw(const CameraIntrinsics& camera, const PoseCamFromWorld& pose, const ibl::SceneLighting& lighting,
             EnvironmentMaps& environment, std::string& error);
 
+  // The object's shadow on itself from these lights (GroundShadow with
+  // self_shadow_maps; strongest first), until set again; null or empty: none.
+  // As many are read as the GPU's texture units and fragment uniforms allow
+  // (selfShadowLightsRead says how many the last draw read).
+  void setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth);
+  int selfShadowLightsRead() const { return self_shadow_lights_read_; }
+
   const ModelUploadStats& stats() const { return stats_; }
   // One line each, said once: what the renderer had to leave out or change.
   const std::vector<std::string>& warnings() const { return warnings_; }
@@ -110,7 +118,7 @@ class ModelRenderer {
                        std::string& error);
   const gles::Texture* textureFor(const model::MeshModel& model, const model::TextureSlot& slot, std::string& error);
   const gles::Program* programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
-                                  std::string& error);
+                                  int self_shadow_lights, std::string& error);
   bool drawPiece(const Piece& piece, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                  const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
                  const std::vector<double>& rung_alphas, std::string& error);
@@ -124,6 +132,10 @@ class ModelRenderer {
   std::map<std::string, gles::Program> programs_;
   gles::Texture brdf_table_;
   int brdf_table_size_ = 0;
+  const std::vector<SelfShadowLight>* self_shadow_ = nullptr;
+  int self_shadow_map_size_px_ = 0;
+  bool self_shadow_packed_ = false;
+  int self_shadow_lights_read_ = 0;
   ModelUploadStats stats_;
   std::vector<std::string> warnings_;
 };

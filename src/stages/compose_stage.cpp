@@ -66,6 +66,9 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
   if (track.found && maps.haveMaps()) {
     // The shadow first: the object then covers the part of it under itself.
     if (!shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error)) return Status::runtimeFailure(error);
+    if (object_.isModel() && shadows.enabled())
+      model_renderer_.setSelfShadow(&shadows.pass().selfShadowLights(), shadows.pass().shadowMapSizePx(),
+                                    shadows.pass().packedDepth());
     const bool drawn =
         object_.isModel() ? model_renderer_.draw(camera_, track.pose, lighting, maps.maps(), error)
         : mesh_.empty()

@@ -18,6 +18,7 @@
 #include "model/model_placement.hpp"
 #include "passes/camera_frame_texture.hpp"
 #include "passes/environment_maps.hpp"
+#include "passes/ground_shadow.hpp"
 #include "passes/model_renderer.hpp"
 #include "passes/object_compositor.hpp"
 
@@ -343,6 +344,125 @@ TEST_F(GpuTest, ModelsBeyondSixteenBitIndicesDrawTheSameWhenSplit) {
   }
   EXPECT_GT(covered, 20000);
   EXPECT_EQ(differing, 0);
+}
+
+// Self-shadowing: a table (a 16 cm floor plate and an 8 cm roof 6 cm above
+// it, both facing up) under a uniform sky L and one dome light straight
+// above of irradiance C = 0.4 pi L. The floor under the roof loses that
+// light: its lit colour is scaled by 1 - C / (pi D) = 0.6 exactly
+// (D = L, the diffuse map of a uniform sky), and the floor outside the roof's
+// footprint and the roof itself keep all of it. Pixels within 3 map texels
+// (2 mm) of the footprint's edge are left out; elsewhere the budget is the
+// 8-bit output (1 level) on both renders. Both packed and depth-texture maps.
+TEST_F(GpuTest, AModelShadowsItselfFromTheDomeLights) {
+  const gles::Capabilities& caps = test::sharedCapabilities();
+  for (const bool packed : {false, true}) {
+    ModelStage stage;
+    stage.pose = test::lookAt({0.02, -0.22, 0.26}, {0.0, 0.0, 0.0});
+    ASSERT_NO_FATAL_FAILURE(initStage(stage, caps));
+    std::string error;
+    ibl::CubeMapRGB sky(stage.maps.settings().reflection_face_size);
+    const glm::vec3 radiance(0.3f, 0.28f, 0.25f);
+    for (auto& face : sky.faces) std::fill(face.begin(), face.end(), radiance);
+    ASSERT_TRUE(stage.maps.setReflection(sky, error)) << error;
+    ASSERT_TRUE(stage.maps.updateDiffuse(error)) << error;
+    const auto diffuse = stage.maps.readDiffuse(error);
+    ASSERT_TRUE(diffuse) << error;
+    const glm::vec3 d_up = diffuse->sampleBilinear({0.0, 0.0, 1.0});
+
+    model::MeshModel table;
+    model::Primitive p;
+    const float floor_half = 0.08f, roof_half = 0.04f, roof_z = 0.06f;
+    for (const auto& [half, z] : {std::pair{floor_half, 0.0f}, {roof_half, roof_z}}) {
+      const auto base = static_cast<std::uint32_t>(p.positions_m.size());
+      p.positions_m.insert(p.positions_m.end(), {{-half, -half, z}, {half, -half, z}, {half, half, z}, {-half, half, z}});
+      p.normals.insert(p.normals.end(), 4, glm::vec3(0, 0, 1));
+      p.indices.insert(p.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    }
+    p.material = 0;
+    table.primitives.push_back(p);
+    table.materials.emplace_back();
+    table.materials[0].metallic_factor = 0.0f;
+    table.materials[0].base_color_factor = {0.8f, 0.8f, 0.8f, 1.0f};
+    table.min_m = {-floor_half, -floor_half, 0.0f};
+    table.max_m = {floor_half, floor_half, roof_z};
+
+    ibl::ShadowCaster caster;
+    caster.shape = ibl::ShadowCaster::Shape::kMesh;
+    auto triangles = std::make_shared<std::vector<glm::vec3>>();
+    for (std::uint32_t index : p.indices) triangles->push_back(p.positions_m[index]);
+    caster.mesh_triangles_w = triangles;
+    caster.mesh_centre_w = {0.0, 0.0, 0.5 * roof_z};
+    caster.mesh_radius_m = glm::length(glm::dvec3(floor_half, floor_half, 0.5 * roof_z));
+    ibl::ShadowLight light;
+    light.direction_w = {0.0, 0.0, 1.0};
+    light.rgb = glm::dvec3(0.4 * 3.14159265358979 * glm::dvec3(d_up));
+    light.share_rgb = glm::dvec3(0.4);
+    light.cone_radius_rad = 0.01;
+    passes::GroundShadowSettings shadow_settings;
+    shadow_settings.self_shadow_maps = true;
+    shadow_settings.force_packed_depth = packed;
+    passes::GroundShadow shadow;
+    ASSERT_TRUE(shadow.init(caps, shadow_settings, error)) << error;
+    ASSERT_TRUE(shadow.update({light}, caster, error)) << error;
+    ASSERT_EQ(shadow.selfShadowLights().size(), 1u);
+
+    passes::ModelRenderer renderer;
+    ASSERT_TRUE(renderer.init(caps, stage.maps.storage(), table, glm::dmat4(1.0), {}, error)) << error;
+    ImageRGB8 unshadowed, shadowed;
+    ASSERT_TRUE(renderModel(stage, renderer, unshadowed, error)) << error;
+    EXPECT_EQ(renderer.selfShadowLightsRead(), 0);
+    renderer.setSelfShadow(&shadow.selfShadowLights(), shadow.shadowMapSizePx(), shadow.packedDepth());
+    ASSERT_TRUE(renderModel(stage, renderer, shadowed, error)) << error;
+    EXPECT_EQ(renderer.selfShadowLightsRead(), 1);
+
+    const double expected_visibility = 1.0 - 0.4;
+    const double margin_m = 3.0 * (2.0 * caster.mesh_radius_m * 1.1) / shadow.shadowMapSizePx();
+    const glm::dvec3 eye = stage.pose.cameraCenterWorld();
+    int under = 0, outside = 0, roof = 0;
+    double worst_under = 0.0, worst_outside = 0.0;
+    for (int y = 0; y < shadowed.height; ++y)
+      for (int x = 0; x < shadowed.width; ++x) {
+        const glm::dvec3 ray = glm::normalize(glm::transpose(stage.pose.R_cam_from_world) *
+                                              ibl::pixelToCameraRay(stage.camera, {x, y}));
+        if (!(ray.z < 0.0)) continue;
+        // The roof first (it is nearer the camera where both lie on the ray).
+        const glm::dvec3 on_roof = eye + ((roof_z - eye.z) / ray.z) * ray;
+        const bool hits_roof = std::abs(on_roof.x) < roof_half && std::abs(on_roof.y) < roof_half;
+        const glm::dvec3 on_floor = eye + (-eye.z / ray.z) * ray;
+        const double inset = std::min(roof_half - std::abs(on_roof.x), roof_half - std::abs(on_roof.y));
+        if (std::abs(inset) < 0.005) continue;  // the roof's edge in the image
+        double visibility = 1.0;
+        int* count = nullptr;
+        double* worst = nullptr;
+        if (hits_roof) {
+          count = &roof;
+          worst = &worst_outside;
+        } else {
+          const double floor_edge = std::min(floor_half - std::abs(on_floor.x), floor_half - std::abs(on_floor.y));
+          if (floor_edge < 0.005) continue;
+          const double footprint = std::min(roof_half - std::abs(on_floor.x), roof_half - std::abs(on_floor.y));
+          if (std::abs(footprint) < margin_m) continue;
+          visibility = footprint > 0.0 ? expected_visibility : 1.0;
+          count = footprint > 0.0 ? &under : &outside;
+          worst = footprint > 0.0 ? &worst_under : &worst_outside;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double lit = ibl::srgbToLinear(unshadowed.row(y)[3 * x + k] / 255.0);
+          const double expected = 255.0 * ibl::linearToSrgb(visibility * lit);
+          *worst = std::max(*worst, std::abs(shadowed.row(y)[3 * x + k] - expected));
+        }
+        ++*count;
+      }
+    std::printf("[ measure  ] self-shadow (%s): under the roof %d px, max error %.2f levels; lit %d + %d px, %.2f\n",
+                shadow.depthStorageDescription().c_str(), under, worst_under, outside, roof, worst_outside);
+    EXPECT_GT(under, 500);
+    EXPECT_GT(outside, 2000);
+    EXPECT_GT(roof, 2000);
+    // One level for each 8-bit render, plus the unshadowed level's own rounding scaled by 0.6.
+    EXPECT_LE(worst_under, 1.5) << packed;
+    EXPECT_LE(worst_outside, 0.0) << packed << ": a lit surface shadows itself (acne)";
+  }
 }
 
 TEST(ModelTextures, TextureTransformIsTranslationTimesRotationTimesScale) {
