@@ -4,6 +4,7 @@
 #include <limits>
 #include <numbers>
 
+#include "sim/gltf_brdf.hpp"
 #include "sim/scene_geometry.hpp"
 
 namespace probelight::sim {
@@ -31,7 +32,47 @@ glm::dvec3 boxWorldFromLocalDirection(const VirtualOccluder& box, const glm::dve
   return {c * dir_local.x - s * dir_local.y, s * dir_local.x + c * dir_local.y, dir_local.z};
 }
 
+VirtualOccluder meshOccluder(std::shared_ptr<const model::MeshModel> model, const glm::dmat4& world_from_model) {
+  VirtualOccluder mesh;
+  mesh.shape = VirtualOccluder::Shape::kMesh;
+  mesh.triangles = std::make_shared<const TriangleScene>(*model, world_from_model);
+  mesh.model = std::move(model);
+  const WorldBounds bounds = mesh.triangles->bounds();
+  if (!bounds.empty()) mesh.position_w = 0.5 * glm::dvec2(bounds.min_w + bounds.max_w);
+  return mesh;
+}
+
+std::optional<TriangleHit> intersectMesh(const VirtualOccluder& mesh, const glm::dvec3& origin, const glm::dvec3& dir,
+                                         double t_max) {
+  if (!mesh.triangles) return std::nullopt;
+  glm::dvec3 from = origin;
+  double travelled = 0.0;
+  // A MASK hole: go on from just past it. Bounded, so that a ray along a
+  // stack of coplanar holes cannot loop.
+  for (int hole = 0; hole < 64; ++hole) {
+    std::optional<TriangleHit> hit = mesh.triangles->intersect(from, dir, t_max - travelled);
+    if (!hit) return std::nullopt;
+    const model::Material* material =
+        hit->material >= 0 && hit->material < static_cast<int>(mesh.model->materials.size())
+            ? &mesh.model->materials[static_cast<std::size_t>(hit->material)]
+            : nullptr;
+    if (!material || material->alpha_mode != model::AlphaMode::kMask ||
+        surfaceAt(*mesh.model, *hit).alpha >= material->alpha_cutoff) {
+      hit->t += travelled;
+      return hit;
+    }
+    travelled += hit->t;
+    from = origin + travelled * dir;
+  }
+  return std::nullopt;
+}
+
 OccluderBound occluderBound(const VirtualOccluder& occluder) {
+  if (occluder.shape == VirtualOccluder::Shape::kMesh) {
+    const WorldBounds bounds = occluder.triangles ? occluder.triangles->bounds() : WorldBounds{};
+    if (bounds.empty()) return {glm::dvec3(occluder.position_w, 0.0), 0.0};
+    return {0.5 * (bounds.min_w + bounds.max_w), 0.5 * glm::length(bounds.max_w - bounds.min_w)};
+  }
   if (occluder.shape == VirtualOccluder::Shape::kSphere)
     return {{occluder.position_w.x, occluder.position_w.y, occluder.radius_m}, occluder.radius_m};
   return {boxCenterWorld(occluder), 0.5 * glm::length(occluder.box_size_m)};
@@ -39,6 +80,13 @@ OccluderBound occluderBound(const VirtualOccluder& occluder) {
 
 std::optional<double> intersectOccluder(const VirtualOccluder& occluder, const glm::dvec3& origin, const glm::dvec3& dir,
                                         glm::dvec3* normal_out) {
+  if (occluder.shape == VirtualOccluder::Shape::kMesh) {
+    const std::optional<TriangleHit> hit =
+        intersectMesh(occluder, origin, dir, std::numeric_limits<double>::infinity());
+    if (!hit) return std::nullopt;
+    if (normal_out) *normal_out = hit->back_face ? -hit->shading_normal : hit->shading_normal;
+    return hit->t;
+  }
   if (occluder.shape == VirtualOccluder::Shape::kSphere) {
     const glm::dvec3 center{occluder.position_w.x, occluder.position_w.y, occluder.radius_m};
     auto t = intersectSphere(origin, dir, center, occluder.radius_m);

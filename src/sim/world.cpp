@@ -15,6 +15,7 @@
 
 #include "sim/camera_path.hpp"
 #include "sim/environment.hpp"
+#include "sim/gltf_brdf.hpp"
 #include "sim/occluder.hpp"
 #include "sim/scene_geometry.hpp"
 #include "sim/tag_pattern.hpp"
@@ -291,6 +292,15 @@ constexpr int kUpperRows = kGridHeight / 2;
 constexpr int kShadowSplit = 3;
 constexpr int kShadowMaxLevel = 4;
 constexpr double kShadowRefineShare = 1e-5;
+// A mesh's outline is not known in closed form, so every piece of sky in
+// its bounding cone is decided by rays. Pieces that the sphere and box
+// would refine (the sun, a lamp) stop at level 3 (0.027 deg: a sun's shadow
+// edge placed to 0.03 mm at 7 cm from the model, far below the 2 mm grid;
+// level 2 left 0.0065 of E_up at a sun's penumbra against the analytic box),
+// and a cell too dim for any of its level-1 pieces to be refined is
+// decided by its centre ray: its error is at most its own share of E_up
+// (< 9e-5), of either sign along the outline, so it averages out.
+constexpr int kMeshShadowMaxLevel = 3;
 // renderWithOccluders: ground grids of exact shadow values, interpolated
 // bilinearly. Near an occluder (within 10 cm of its bounding sphere's axis)
 // the spacing is 2 mm, about two pixels at the default 0.6 m and under the
@@ -347,7 +357,8 @@ OccluderCone coneFrom(const VirtualOccluder& occluder, const glm::dvec3& point_w
     cone.cos_half = std::sqrt(1.0 - cone.sin_half * cone.sin_half);
     cone.half_angle_rad = std::asin(cone.sin_half);
   }
-  if (occluder.shape == VirtualOccluder::Shape::kSphere) return cone;
+  // A sphere's cone is exact; a mesh has only its bounding cone.
+  if (occluder.shape != VirtualOccluder::Shape::kBox) return cone;
 
   const glm::dvec3 half_m = 0.5 * occluder.box_size_m;
   const glm::dvec3 q = boxLocalFromWorldDirection(occluder, point_w - boxCenterWorld(occluder));
@@ -398,7 +409,7 @@ Visibility classify(const OccluderCone& cone, const glm::dvec3& dir, double rho_
       return Visibility::kCut;
     }
   }
-  if (cone.occluder->shape == VirtualOccluder::Shape::kSphere) return Visibility::kCut;
+  if (cone.occluder->shape != VirtualOccluder::Shape::kBox) return Visibility::kCut;
   if (cone.plane_count == 0) return Visibility::kCut;  // degenerate: let the ray test decide
   // A patch of radius rho around dir is wholly on the inner side of a plane
   // through the point iff n.dir > sin(rho), wholly outside iff n.dir < -sin(rho).
@@ -545,6 +556,8 @@ struct ShadowContext {
   double refine_luminance = 0.0;                 // a cut piece carrying more than this is split again
   std::array<glm::dvec3, kUpperRows> row_max_hdr{};  // per row, the largest cell radiance (for bounds)
   std::vector<VirtualOccluder> occluders;
+  int max_level = kShadowMaxLevel;  // kMeshShadowMaxLevel with a mesh among the occluders
+  bool meshes_only = false;         // every occluder is a mesh: dim cut cells are decided by their centre
 };
 
 // Sums over the pieces of one cut cell, of moment_z * L: over the blocked
@@ -555,8 +568,64 @@ struct PieceSums {
 
 // renderWithOccluders' per-frame state: the shadow query, the occluders'
 // irradiance table, and the ground grid of shadow values filled on demand.
+// Directions of the upper hemisphere drawn in proportion to the sky's
+// radiance: a cell of the direction grid with probability proportional to
+// (its luminance + 1% of the mean) times its solid angle, then a uniform
+// direction within it. The floor of 1% keeps every direction possible
+// (a sun smaller than the grid's sub-samples is still found, by the BRDF's
+// own samples), so the estimate stays unbiased whatever the grid missed.
+struct SkySampler {
+  std::vector<double> cdf;          // over the kUpperRows x kGridWidth cells, last = 1
+  std::vector<double> probability;  // of each cell
+
+  void build(const std::vector<glm::dvec3>& cell_radiance) {
+    const auto& grid = directionGrid();
+    const size_t cells = static_cast<size_t>(kUpperRows) * kGridWidth;
+    double mean = 0.0;
+    for (size_t i = 0; i < cells; ++i) mean += luminance(cell_radiance[i]);
+    mean /= static_cast<double>(cells);
+    probability.resize(cells);
+    cdf.resize(cells);
+    double total = 0.0;
+    for (size_t i = 0; i < cells; ++i) {
+      probability[i] = (std::max(0.0, luminance(cell_radiance[i])) + 0.01 * mean + 1e-300) * solidAngle(grid[i]);
+      total += probability[i];
+    }
+    double running = 0.0;
+    for (size_t i = 0; i < cells; ++i) {
+      probability[i] /= total;
+      running += probability[i];
+      cdf[i] = running;
+    }
+    cdf.back() = 1.0;
+  }
+  static double solidAngle(const GridCell& cell) {
+    return (cell.phi1 - cell.phi0) * (std::cos(cell.theta0) - std::cos(cell.theta1));
+  }
+  // A direction and its density per steradian, from u1, u2, u3 in [0, 1).
+  glm::dvec3 sample(double u1, double u2, double u3, double& pdf) const {
+    const size_t i = std::min(cdf.size() - 1, static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), u1) - cdf.begin()));
+    const GridCell& cell = directionGrid()[i];
+    const double cos_theta = std::cos(cell.theta0) - u2 * (std::cos(cell.theta0) - std::cos(cell.theta1));
+    const double sin_theta = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
+    const double phi = cell.phi0 + u3 * (cell.phi1 - cell.phi0);
+    pdf = probability[i] / solidAngle(cell);
+    return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+  }
+  double pdf(const glm::dvec3& dir) const {
+    if (!(dir.z > 0.0)) return 0.0;
+    const double theta = std::acos(std::clamp(dir.z, -1.0, 1.0));
+    const double phi = std::atan2(dir.y, dir.x);
+    const int row = std::clamp(static_cast<int>(theta / kPi * kGridHeight), 0, kUpperRows - 1);
+    const int col = std::clamp(static_cast<int>((phi + kPi) / (2.0 * kPi) * kGridWidth), 0, kGridWidth - 1);
+    const size_t i = static_cast<size_t>(row) * kGridWidth + static_cast<size_t>(col);
+    return probability[i] / solidAngle(directionGrid()[i]);
+  }
+};
+
 struct OccluderFrame {
   ShadowContext shadow;
+  SkySampler sky_hdr, sky_clipped;  // for meshes' path tracing; built only when a mesh needs them
   std::vector<glm::dvec3> irradiance_by_normal;  // scene units, kIrradianceTableHeight rows (theta 0..pi) x width (phi)
   mutable std::mutex node_mutex;
   mutable std::unordered_map<std::uint64_t, glm::dvec3> node_fraction;  // hdr fraction by packed grid index
@@ -761,12 +830,14 @@ struct World::Impl {
 
   // Scene radiance along a camera ray, and the first object it hits (and, when
   // asked, its edgeClass, for free).
+  // sample_share: the part of a pixel this ray stands for (a mesh's paths
+  // are shared out among an edge pixel's sub-samples).
   glm::dvec3 shadeCameraRay(const glm::dvec3& dir, const FrameState& fs, SceneObject& object,
-                            std::uint8_t* edge_class = nullptr) const {
+                            std::uint8_t* edge_class = nullptr, double sample_share = 1.0) const {
     bool white = false;
     int occluder = -1;
     const double t = firstHit(dir, fs, object, &occluder);
-    glm::dvec3 radiance = shadeHit(dir, fs, t, object, white, occluder);
+    glm::dvec3 radiance = shadeHit(dir, fs, t, object, white, occluder, sample_share);
     if (edge_class) *edge_class = classOf(object, white, occluder);
     return radiance;
   }
@@ -774,7 +845,7 @@ struct World::Impl {
   // Radiance of the first hit at distance t_best along dir; `object` floor
   // becomes tag where the tag is printed.
   glm::dvec3 shadeHit(const glm::dvec3& dir, const FrameState& fs, double t_best, SceneObject& object,
-                      bool& white, int occluder_index = -1) const {
+                      bool& white, int occluder_index = -1, double sample_share = 1.0) const {
     const RigGeometry& rig = scene.rig;
     switch (object) {
       case SceneObject::kEnvironment:
@@ -788,6 +859,7 @@ struct World::Impl {
       }
       case SceneObject::kOccluder: {
         const VirtualOccluder& occluder = fs.occluders->shadow.occluders[static_cast<size_t>(occluder_index)];
+        if (occluder.shape == VirtualOccluder::Shape::kMesh) return shadeMesh(dir, fs, occluder, sample_share);
         glm::dvec3 normal(0.0, 0.0, 1.0);
         intersectOccluder(occluder, fs.eye, dir, &normal);
         return occluder.albedo * fs.occluders->irradiance(normal) / kPi;
@@ -907,6 +979,13 @@ struct World::Impl {
       context.row_max_hdr[static_cast<size_t>(row)] = row_max;
     }
     context.refine_luminance = kShadowRefineShare * luminance(context.e_up_hdr);
+    context.meshes_only = !occluders.empty();
+    for (const VirtualOccluder& occluder : occluders) {
+      if (occluder.shape == VirtualOccluder::Shape::kMesh)
+        context.max_level = kMeshShadowMaxLevel;
+      else
+        context.meshes_only = false;
+    }
     return context;
   }
 
@@ -915,7 +994,7 @@ struct World::Impl {
   void addPiece(Visibility v, double theta0, double theta1, double phi0, double phi1, int level, const glm::dvec3& dir,
                 double moment_z, const glm::dvec3& hdr, const glm::dvec3& point_w,
                 const std::vector<OccluderCone>& cones, const ShadowContext& context, PieceSums& sums) const {
-    if (v == Visibility::kCut && level < kShadowMaxLevel && moment_z * luminance(hdr) > context.refine_luminance) {
+    if (v == Visibility::kCut && level < context.max_level && moment_z * luminance(hdr) > context.refine_luminance) {
       splitCutPiece(theta0, theta1, phi0, phi1, level + 1, point_w, cones, context, sums);
       return;
     }
@@ -1014,12 +1093,16 @@ struct World::Impl {
         if (block_visibility == Visibility::kClear) continue;
         for (int col = block * kColumnBlock; col < (block + 1) * kColumnBlock; ++col) {
           const size_t i = r * kGridWidth + static_cast<size_t>(col);
-          const Visibility v = block_visibility == Visibility::kBlocked
+          Visibility v = block_visibility == Visibility::kBlocked
                                    ? Visibility::kBlocked
                                    : classifyAll(cones, geometry.centre_dirs[i], geometry.rho_rad[r],
                                                  geometry.sin_rho[r], geometry.cos_rho[r]);
           if (v == Visibility::kClear) continue;
           const double moment_z = cells[i].moment.z;
+          if (v == Visibility::kCut && context.meshes_only &&
+              moment_z * luminance(context.grid->hdr[i]) <= kShadowSplit * kShadowSplit * context.refine_luminance)
+            v = blockedAlong(cones, point_w, geometry.centre_dirs[i]) ? Visibility::kBlocked : Visibility::kClear;
+          if (v == Visibility::kClear) continue;
           if (v == Visibility::kBlocked) {
             blocked_hdr += moment_z * context.grid->hdr[i];
             blocked_clipped += moment_z * context.grid->clipped[i];
@@ -1173,7 +1256,130 @@ struct World::Impl {
         }
       }
     });
+    bool hdr_needed = false, clipped_needed = false;
+    for (const VirtualOccluder& occluder : occluders)
+      if (occluder.shape == VirtualOccluder::Shape::kMesh) (occluder.clipped_lighting ? clipped_needed : hdr_needed) = true;
+    if (hdr_needed) frame->sky_hdr.build(grid.hdr);
+    if (clipped_needed) frame->sky_clipped.build(grid.clipped);
     return frame;
+  }
+
+  // ---- A model's truth: path tracing ----
+  //
+  // The radiance a real copy of the model sends to the eye: its glTF
+  // material (sim/gltf_brdf, the specification's BRDF) integrated against
+  // everything it sees, by Monte Carlo paths with two strategies combined
+  // by the balance heuristic (Veach's multiple importance sampling): a
+  // direction drawn from the sky's brightness (SkySampler) with a shadow ray,
+  // and one drawn from the BRDF, which follows the path on when it meets the
+  // model again (interreflection, up to max_bounces) and otherwise takes the
+  // floor's or the sky's radiance. The floor is the world's own Lambertian
+  // floor and tag, darkened by the occluders' shadow (shadowFraction): what
+  // a model standing on it really sees below. Left out, each a small share
+  // of what a model on the floor beside the tag receives: the light the
+  // ball and its post reflect or hide, and the model's own light bounced
+  // by the floor (the floor is lit by the sky alone, as in render()).
+
+  // The sky along dir (unit, upward), scene units: the full HDR, or what an
+  // 8-bit camera can know of it through the ball.
+  glm::dvec3 meshSkyRadiance(const glm::dvec3& dir, const FrameState& fs, bool clipped) const {
+    const glm::dvec3 radiance = environmentRadiance(dir, fs.lighting);
+    if (!clipped) return radiance;
+    const double reflectance = scene.rig.probe_reflectance;
+    return glm::min(radiance * exposure * reflectance, glm::dvec3(1.0)) / (reflectance * exposure);
+  }
+
+  glm::dvec3 meshFloorRadiance(const glm::dvec3& point_w, const FrameState& fs, bool clipped) const {
+    SceneObject ignored;
+    glm::dvec3 radiance = groundRadiance(point_w, fs, ignored) * shadowFraction({point_w.x, point_w.y}, *fs.occluders);
+    if (clipped) {
+      const ShadowContext& context = fs.occluders->shadow;
+      for (int c = 0; c < 3; ++c)
+        radiance[c] *= context.e_up_hdr[c] > 0.0 ? context.e_up_clipped[c] / context.e_up_hdr[c] : 0.0;
+    }
+    return radiance;
+  }
+
+  // The surface at a hit as the path sees it: its material, and a normal on
+  // the side the ray came from (the back of a single-sided triangle is
+  // shaded as its front: a real object has no invisible side), bent back
+  // towards the viewer where interpolated normals tilt past the horizon.
+  struct MeshSurface {
+    GltfSurface material;
+    glm::dvec3 point_w{0.0}, normal{0.0, 0.0, 1.0};
+  };
+  static MeshSurface meshSurface(const VirtualOccluder& mesh, const TriangleHit& hit, const glm::dvec3& origin,
+                                 const glm::dvec3& dir) {
+    MeshSurface surface;
+    surface.material = surfaceAt(*mesh.model, hit);
+    surface.point_w = origin + hit.t * dir;
+    const glm::dvec3 geometric = hit.back_face ? -hit.geometric_normal : hit.geometric_normal;
+    glm::dvec3 n = hit.back_face ? -hit.shading_normal : hit.shading_normal;
+    const double n_dot_v = -glm::dot(n, dir);
+    if (!(n_dot_v > 1e-4)) n = glm::normalize(n + (1e-4 - n_dot_v) * -dir);
+    if (!std::isfinite(n.x) || glm::dot(n, geometric) <= 0.0) n = geometric;
+    surface.normal = n;
+    return surface;
+  }
+
+  glm::dvec3 shadeMesh(const glm::dvec3& dir, const FrameState& fs, const VirtualOccluder& mesh,
+                       double sample_share) const {
+    const std::optional<TriangleHit> first = intersectMesh(mesh, fs.eye, dir, std::numeric_limits<double>::infinity());
+    if (!first) return glm::dvec3(0.0);  // firstHit found it; rounding on an edge may not
+    const bool clipped = mesh.clipped_lighting;
+    const SkySampler& sky = clipped ? fs.occluders->sky_clipped : fs.occluders->sky_hdr;
+    const MeshSurface start = meshSurface(mesh, *first, fs.eye, dir);
+    // Random numbers from the ray alone: the same frame gives the same bytes.
+    std::uint64_t state = splitMix64(std::hash<double>{}(dir.x) ^ splitMix64(std::hash<double>{}(dir.y)) ^
+                                     splitMix64(splitMix64(std::hash<double>{}(dir.z))));
+    auto uniform = [&state] {
+      state = splitMix64(state);
+      return static_cast<double>(state >> 11) * 0x1.0p-53;
+    };
+    const int paths = std::max(1, static_cast<int>(std::lround(mesh.path_samples * sample_share)));
+    glm::dvec3 sum(0.0);
+    for (int path = 0; path < paths; ++path) {
+      MeshSurface at = start;
+      glm::dvec3 view = -dir, throughput(1.0), radiance = at.material.emissive;
+      for (int bounce = 0;; ++bounce) {
+        const GltfSurface& material = at.material;
+        // The sky, drawn by its brightness.
+        double sky_pdf = 0.0;
+        const glm::dvec3 to_sky = sky.sample(uniform(), uniform(), uniform(), sky_pdf);
+        const glm::dvec3 f_sky = gltf_brdf::evaluate(at.normal, view, to_sky, material);
+        if (sky_pdf > 0.0 && (f_sky.r > 0.0 || f_sky.g > 0.0 || f_sky.b > 0.0) &&
+            !intersectMesh(mesh, at.point_w, to_sky, std::numeric_limits<double>::infinity())) {
+          const double brdf_pdf = gltf_brdf::pdf(at.normal, view, to_sky, material);
+          radiance += throughput * f_sky * meshSkyRadiance(to_sky, fs, clipped) / (sky_pdf + brdf_pdf);
+        }
+        // The BRDF's own direction.
+        const gltf_brdf::BrdfSample next = gltf_brdf::sampleDirection(at.normal, view, material, uniform(), uniform(), uniform());
+        if (!(next.pdf > 0.0)) break;
+        const glm::dvec3 f = gltf_brdf::evaluate(at.normal, view, next.l, material);
+        if (!(f.r > 0.0 || f.g > 0.0 || f.b > 0.0)) break;
+        const glm::dvec3 weight = f / next.pdf;
+        const std::optional<TriangleHit> hit =
+            intersectMesh(mesh, at.point_w, next.l, std::numeric_limits<double>::infinity());
+        if (hit) {
+          if (bounce >= mesh.max_bounces) break;
+          throughput *= weight;
+          at = meshSurface(mesh, *hit, at.point_w, next.l);
+          view = -next.l;
+          radiance += throughput * at.material.emissive;
+          continue;
+        }
+        if (next.l.z < 0.0) {
+          const glm::dvec3 ground = at.point_w + (-at.point_w.z / next.l.z) * next.l;
+          radiance += throughput * weight * meshFloorRadiance(ground, fs, clipped);
+        } else {
+          const double sky_density = sky.pdf(next.l);
+          radiance += throughput * f * meshSkyRadiance(next.l, fs, clipped) / (next.pdf + sky_density);
+        }
+        break;
+      }
+      sum += radiance;
+    }
+    return sum / static_cast<double>(paths);
   }
 
   // render()'s sensor model for a prepared frame state.
@@ -1317,7 +1523,8 @@ struct World::Impl {
                 std::uint64_t bits = splitMix64(pixel * 1024u + static_cast<std::uint64_t>(sy * edge_n + sx));
                 double u = (sx + (bits & 0xFFFF) / 65536.0) / edge_n;
                 double v = (sy + ((bits >> 16) & 0xFFFF) / 65536.0) / edge_n;
-                sum += shadeCameraRay(rayInPixel(x, y, u, v, fs), fs, objects[static_cast<size_t>(sy * edge_n + sx)]);
+                sum += shadeCameraRay(rayInPixel(x, y, u, v, fs), fs, objects[static_cast<size_t>(sy * edge_n + sx)],
+                                      nullptr, 1.0 / static_cast<double>(edge_n * edge_n));
               }
             emit(pixel, sum / static_cast<double>(objects.size()), objects);
             continue;

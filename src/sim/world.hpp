@@ -126,6 +126,12 @@ class World {
   // render()), and the occluders' irradiance is interpolated from a 64x32
   // table of normals. truth.tag_fully_visible / probe_fully_visible also turn
   // false when an occluder hides part of the tag / of the ball's outline.
+  // A kMesh occluder (a user's model, meshOccluder) is shaded otherwise: by
+  // path tracing its own glTF materials (sim/gltf_brdf) against the sky
+  // (drawn by its brightness, multiple importance sampling with the BRDF),
+  // its own triangles (self-occlusion, and interreflection up to its
+  // max_bounces) and the shadowed floor below, path_samples paths per
+  // shaded sample; see shadeMesh in world.cpp for what it leaves out.
   void renderWithOccluders(std::uint64_t frame_index, const std::vector<VirtualOccluder>& occluders,
                            ImageRGB8& out, FrameTruth& truth) const;
   // Below this (every channel) renderWithOccluders leaves the ground unshadowed:
