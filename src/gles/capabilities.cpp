@@ -16,6 +16,22 @@ std::string glString(GLenum name) {
   return text != nullptr ? text : "";
 }
 
+// EGL_SAMPLES of the config the current context was made with (0 when it
+// cannot be told: no context, or a config-less one).
+int currentConfigSamples(EGLDisplay display) {
+  const EGLContext context = eglGetCurrentContext();
+  EGLint config_id = 0;
+  if (context == EGL_NO_CONTEXT || !eglQueryContext(display, context, EGL_CONFIG_ID, &config_id)) return 0;
+  const EGLint attributes[] = {EGL_CONFIG_ID, config_id, EGL_NONE};
+  EGLConfig config = nullptr;
+  EGLint count = 0;
+  EGLint samples = 0;
+  if (!eglChooseConfig(display, attributes, &config, 1, &count) || count < 1 ||
+      !eglGetConfigAttrib(display, config, EGL_SAMPLES, &samples))
+    return 0;
+  return samples;
+}
+
 }  // namespace
 
 Capabilities probeCapabilities() {
@@ -32,8 +48,27 @@ Capabilities probeCapabilities() {
   caps.unpack_subimage = hasExtension(extensions, "GL_EXT_unpack_subimage");
   caps.element_index_uint = hasExtension(extensions, "GL_OES_element_index_uint");
   caps.texture_npot = hasExtension(extensions, "GL_OES_texture_npot");
-  if (const EGLDisplay display = eglGetCurrentDisplay(); display != EGL_NO_DISPLAY)
+  if (const EGLDisplay display = eglGetCurrentDisplay(); display != EGL_NO_DISPLAY) {
     caps.egl_dmabuf_import = hasExtension(eglQueryString(display, EGL_EXTENSIONS), "EGL_EXT_image_dma_buf_import");
+    caps.egl_config_samples = currentConfigSamples(display);
+  }
+  // eglGetProcAddress may hand out a stub for any name (Mesa does, for
+  // extensions it does not offer), so the extension string decides and the
+  // pointers only confirm.
+  if (hasExtension(extensions, "GL_EXT_multisampled_render_to_texture")) {
+    caps.renderbuffer_storage_multisample = reinterpret_cast<PFNGLRENDERBUFFERSTORAGEMULTISAMPLEEXTPROC>(
+        eglGetProcAddress("glRenderbufferStorageMultisampleEXT"));
+    caps.framebuffer_texture_2d_multisample = reinterpret_cast<PFNGLFRAMEBUFFERTEXTURE2DMULTISAMPLEEXTPROC>(
+        eglGetProcAddress("glFramebufferTexture2DMultisampleEXT"));
+    if (caps.renderbuffer_storage_multisample != nullptr && caps.framebuffer_texture_2d_multisample != nullptr) {
+      caps.multisampled_render_to_texture = true;
+      // Only asked with the EXT: a plain GLES2 context rejects the enum.
+      glGetIntegerv(GL_MAX_SAMPLES_EXT, &caps.max_samples);
+    } else {
+      caps.renderbuffer_storage_multisample = nullptr;
+      caps.framebuffer_texture_2d_multisample = nullptr;
+    }
+  }
 
   GLint range[2] = {0, 0};
   GLint precision = 0;
@@ -48,6 +83,10 @@ Capabilities probeCapabilities() {
   glGetIntegerv(GL_MAX_CUBE_MAP_TEXTURE_SIZE, &caps.max_cube_map_size_px);
   glGetIntegerv(GL_MAX_TEXTURE_IMAGE_UNITS, &caps.max_fragment_texture_units);
   glGetIntegerv(GL_MAX_FRAGMENT_UNIFORM_VECTORS, &caps.max_fragment_uniform_vectors);
+  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &caps.max_renderbuffer_size_px);
+  GLint viewport_dims[2] = {0, 0};
+  glGetIntegerv(GL_MAX_VIEWPORT_DIMS, viewport_dims);
+  caps.max_viewport_px = std::min(viewport_dims[0], viewport_dims[1]);
   caps.renderer = glString(GL_RENDERER);
   caps.version = glString(GL_VERSION);
   return caps;
@@ -60,6 +99,9 @@ Capabilities Capabilities::withoutExtensions() const {
   plain.max_cube_map_size_px = max_cube_map_size_px;
   plain.max_fragment_texture_units = std::min(8, max_fragment_texture_units);
   plain.max_fragment_uniform_vectors = max_fragment_uniform_vectors;
+  plain.max_renderbuffer_size_px = max_renderbuffer_size_px;
+  plain.max_viewport_px = max_viewport_px;
+  plain.egl_config_samples = egl_config_samples;  // the surface's, not an extension
   plain.renderer = renderer + " [extensions masked]";
   plain.version = version;
   return plain;
@@ -71,7 +113,8 @@ std::string Capabilities::summary() const {
                      ", mediump " + std::to_string(fragment_mediump_mantissa_bits) + " bits | max tex " +
                      std::to_string(max_texture_size_px) + ", cube " + std::to_string(max_cube_map_size_px) + ", units " +
                      std::to_string(max_fragment_texture_units) + ", frag uniforms " +
-                     std::to_string(max_fragment_uniform_vectors) + " |";
+                     std::to_string(max_fragment_uniform_vectors) + ", EGL config samples " +
+                     std::to_string(egl_config_samples) + " |";
   auto flag = [&text](bool on, const char* name) {
     text += on ? " +" : " -";
     text += name;
@@ -88,6 +131,8 @@ std::string Capabilities::summary() const {
   flag(element_index_uint, "index_uint");
   flag(texture_npot, "npot");
   flag(egl_dmabuf_import, "dmabuf_import");
+  flag(multisampled_render_to_texture, "msaa_render_to_texture");
+  if (multisampled_render_to_texture) text += " (" + std::to_string(max_samples) + " samples)";
   text += canRenderHalfFloat() ? " | maps: half float" : " | maps: 8-bit";
   return text;
 }

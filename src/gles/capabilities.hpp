@@ -5,6 +5,9 @@
 
 #include <string>
 
+#include <GLES2/gl2.h>
+#include <GLES2/gl2ext.h>
+
 namespace probelight::gles {
 
 struct Capabilities {
@@ -27,6 +30,21 @@ struct Capabilities {
   int max_cube_map_size_px = 0;
   int max_fragment_texture_units = 8;      // GL_MAX_TEXTURE_IMAGE_UNITS; GLES2 guarantees 8
   int max_fragment_uniform_vectors = 16;   // GL_MAX_FRAGMENT_UNIFORM_VECTORS; GLES2 guarantees 16
+  int max_renderbuffer_size_px = 0;        // GL_MAX_RENDERBUFFER_SIZE
+  int max_viewport_px = 0;                 // the smaller of GL_MAX_VIEWPORT_DIMS
+  // Anti-aliased model edges (passes/edge_antialiasing.hpp). The EXT lets a
+  // single-sampled texture be rendered with N samples that the GPU resolves
+  // on its way out of tile memory (tilers: Mali, Adreno, PowerVR): MSAA at
+  // little more than the cost of a plain pass. Set only when the extension
+  // is listed and both entry points resolve, so a caller may call them.
+  bool multisampled_render_to_texture = false;  // GL_EXT_multisampled_render_to_texture
+  int max_samples = 0;                          // GL_MAX_SAMPLES_EXT with the EXT; 0 without
+  PFNGLRENDERBUFFERSTORAGEMULTISAMPLEEXTPROC renderbuffer_storage_multisample = nullptr;
+  PFNGLFRAMEBUFFERTEXTURE2DMULTISAMPLEEXTPROC framebuffer_texture_2d_multisample = nullptr;
+  // EGL_SAMPLES of the current context's config: the multisampling of a
+  // window surface drawn directly (the kiosk draws into FBOs, so this is for
+  // the log; a draw checks the bound framebuffer's GL_SAMPLES instead).
+  int egl_config_samples = 0;
   std::string renderer;  // GL_RENDERER
   std::string version;   // GL_VERSION
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include <glm/gtc/type_ptr.hpp>
@@ -108,6 +109,11 @@ bool ModelRenderer::init(const gles::Capabilities& capabilities, CubeStorage sto
   programs_.clear();
   warnings_.clear();
   stats_ = ModelUploadStats{};
+  edge_request_ = EdgeAntialiasing{};
+  edge_width_px_ = edge_height_px_ = 0;
+  edge_layer_ = EdgeLayer{};
+  bounds_min_w_ = glm::dvec3(std::numeric_limits<double>::infinity());
+  bounds_max_w_ = glm::dvec3(-std::numeric_limits<double>::infinity());
   if (!(settings.near_m > 0.0 && settings.far_m > settings.near_m)) {
     error = "ModelRenderer: depth range needs 0 < near_m < far_m";
     return false;
@@ -288,6 +294,8 @@ bool ModelRenderer::uploadPrimitive(const model::Primitive& source, std::size_t 
     float* v = &vertices[i * static_cast<std::size_t>(floats)];
     const glm::dvec3 p = glm::dvec3(world_from_model * glm::dvec4(glm::dvec3(primitive.positions_m[i]), 1.0));
     centre += p;
+    bounds_min_w_ = glm::min(bounds_min_w_, p);
+    bounds_max_w_ = glm::max(bounds_max_w_, p);
     glm::dvec3 n = normal_from_model * glm::dvec3(primitive.normals[i]);
     const double length = glm::length(n);
     n = length > 0.0 && std::isfinite(length) ? n / length : glm::dvec3(0, 0, 1);
@@ -363,6 +371,48 @@ const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_firs
   return &programs_.emplace(defines, std::move(*program)).first->second;
 }
 
+bool ModelRenderer::prepareEdges(int width_px, int height_px, int target_samples, std::string& error) {
+  const EdgeAntialiasing request =
+      chooseEdgeAntialiasing(capabilities_, settings_.edge_samples, target_samples, width_px, height_px);
+  if (request == edge_request_ && width_px == edge_width_px_ && height_px == edge_height_px_) return true;
+  edge_request_ = request;
+  edge_width_px_ = width_px;
+  edge_height_px_ = height_px;
+  EdgeAntialiasing choice = request;
+  stats_.edge_layer_bytes = 0;
+  if (choice.usesLayer()) {
+    std::string why;
+    bool made = edge_layer_.init(capabilities_, choice, width_px, height_px, why);
+    if (!made && choice.strategy == EdgeStrategy::kMultisampleRenderToTexture) {
+      // A driver that lists the EXT and then refuses the framebuffer: the
+      // core path, which needs nothing optional.
+      warnings_.push_back("edge anti-aliasing: " + why + "; using the supersampled layer instead");
+      gles::Capabilities without = capabilities_;
+      without.multisampled_render_to_texture = false;
+      choice = chooseEdgeAntialiasing(without, settings_.edge_samples, target_samples, width_px, height_px);
+      made = choice.usesLayer() && edge_layer_.init(capabilities_, choice, width_px, height_px, why);
+    }
+    if (!made) {
+      if (choice.usesLayer()) warnings_.push_back("edge anti-aliasing: " + why + "; edges are not smoothed");
+      const int requested = choice.requested_samples;
+      choice = EdgeAntialiasing{};
+      choice.requested_samples = requested;
+      choice.reason = "the GPU refused the layer: " + why;
+      edge_layer_ = EdgeLayer{};
+      // The failed allocation's GL error is spent; the frame goes on without.
+      while (glGetError() != GL_NO_ERROR) {
+      }
+    } else {
+      choice.samples = edge_layer_.samples();
+      stats_.edge_layer_bytes = edge_layer_.bytes();
+    }
+  } else {
+    edge_layer_ = EdgeLayer{};
+  }
+  stats_.edges = choice;
+  return gles::checkGl("ModelRenderer::prepareEdges", error);
+}
+
 void ModelRenderer::setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth) {
   self_shadow_ = lights;
   self_shadow_map_size_px_ = map_size_px;
@@ -389,6 +439,21 @@ bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld&
     return glm::length(a->centre_w - eye_w) > glm::length(b->centre_w - eye_w);
   });
 
+  // The framebuffer's own samples decide first (kMultisampleConfig): a
+  // multisampled target needs no layer.
+  GLint target_samples = 0;
+  glGetIntegerv(GL_SAMPLES, &target_samples);
+  if (!prepareEdges(camera.width_px, camera.height_px, target_samples, error)) return false;
+  const bool layered = stats_.edges.usesLayer();
+  if (layered) {
+    // 2 px of margin: the GPU's fp32 projection against the CPU's double,
+    // and the bow of the distorted outline between its samples.
+    const PixelRect region =
+        projectedBounds(camera, pose, bounds_min_w_, bounds_max_w_, settings_.near_m, /*margin_px=*/2);
+    if (region.empty() || pieces_.empty()) return true;  // nothing of the model is in the frame
+    edge_layer_.begin(region);
+  }
+
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
@@ -396,16 +461,30 @@ bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld&
   glFrontFace(GL_CCW);
   glCullFace(GL_BACK);
   for (const Piece* piece : opaque)
-    if (!drawPiece(*piece, camera, pose, lighting, environment, rung_alphas, error)) return false;
+    if (!drawPiece(*piece, camera, pose, lighting, environment, rung_alphas, error)) {
+      if (layered) edge_layer_.restore();
+      return false;
+    }
   glDepthMask(GL_FALSE);
   glEnable(GL_BLEND);
-  glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  if (layered) {
+    // The layer holds premultiplied colour over transparent black: colour
+    // a c + (1 - a) dst as before, and alpha a + (1 - a) dst_a (the layer's
+    // coverage), so that layer + (1 - alpha) video is this blend over the video.
+    glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+  } else {
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  }
   for (const Piece* piece : blended)
-    if (!drawPiece(*piece, camera, pose, lighting, environment, rung_alphas, error)) return false;
+    if (!drawPiece(*piece, camera, pose, lighting, environment, rung_alphas, error)) {
+      if (layered) edge_layer_.restore();
+      return false;
+    }
   glDisable(GL_BLEND);
   glDepthMask(GL_TRUE);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
+  if (layered && !edge_layer_.composite(error)) return false;
   glActiveTexture(GL_TEXTURE0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);

@@ -19,6 +19,12 @@
 // glossy one (stages/scene_object.hpp's modelReadsGlossy tells the maps
 // stage whether to make them at all).
 //
+// Edges (passes/edge_antialiasing.hpp): with edge_samples > 1 the model's
+// silhouette is anti-aliased against the video, by the framebuffer's own
+// multisampling, GL_EXT_multisampled_render_to_texture, or (core GLES2) a
+// supersampled layer; the model is then drawn into a layer of its own,
+// depth-tested against itself, and composited over the frame.
+//
 // Order: opaque and masked primitives first, then blended ones back to
 // front (by their centres, from the eye), without depth writes. Blending is
 // over the sRGB-encoded camera image, as GLES2 without sRGB framebuffers
@@ -39,6 +45,7 @@
 #include "ibl/environment_brdf.hpp"
 #include "ibl/surface_shading.hpp"
 #include "model/mesh_model.hpp"
+#include "passes/edge_antialiasing.hpp"
 #include "passes/environment_maps.hpp"
 #include "passes/ground_shadow.hpp"
 
@@ -53,7 +60,18 @@ struct ModelRendererSettings {
   // Testing the paths a board without these extensions takes.
   bool force_short_indices = false;    // as if OES_element_index_uint were absent
   bool force_power_of_two = false;     // as if OES_texture_npot were absent
+  // Samples a pixel for the model's edges against the video
+  // (chooseEdgeAntialiasing): 4 is MSAA 4x where the GPU has it, else a
+  // 2 x 2 supersampled layer (4x the model's fragment work); 16 a 4 x 4 one;
+  // 1 off: the model drawn straight into the frame, one sample a pixel. The
+  // kiosk asks for kKioskEdgeSamples; off is this pass's own default so that
+  // a bare ModelRenderer blends exactly as a direct draw (through the 8-bit
+  // layer a blended material's colour is rounded once more, 0.5 code).
+  int edge_samples = 1;
 };
+
+// What stages/compose_stage (probelight run, render) asks for.
+constexpr int kKioskEdgeSamples = 4;
 
 // What init() made, for the report and the bench.
 struct ModelUploadStats {
@@ -66,6 +84,10 @@ struct ModelUploadStats {
   std::uint64_t index_bytes = 0;
   bool short_indices_only = true;   // no 32-bit index buffer was needed
   double upload_ms = 0.0;
+  // How the edges are anti-aliased (prepareEdges, and again by each draw
+  // for its framebuffer), and the GPU memory its layer holds.
+  EdgeAntialiasing edges;
+  std::uint64_t edge_layer_bytes = 0;
 };
 
 class ModelRenderer {
@@ -74,8 +96,9 @@ class ModelRenderer {
             const glm::dmat4& world_from_model, const ModelRendererSettings& settings, std::string& error);
 
   // Draws the model into the bound framebuffer (whose viewport covers the
-  // camera image), depth-tested against what is there. Uses the glossy maps
-  // when environment.glossyWritten().
+  // camera image), depth-tested against what is there, or, with edge
+  // anti-aliasing through a layer, against itself and composited over it.
+  // Uses the glossy maps when environment.glossyWritten().
   bool draw(const CameraIntrinsics& camera, const PoseCamFromWorld& pose, const ibl::SceneLighting& lighting,
             EnvironmentMaps& environment, std::string& error);
 
@@ -85,6 +108,13 @@ class ModelRenderer {
   // (selfShadowLightsRead says how many the last draw read).
   void setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth);
   int selfShadowLightsRead() const { return self_shadow_lights_read_; }
+
+  // Chooses the edge anti-aliasing for frames of width_px x height_px drawn
+  // into a framebuffer with target_samples (GL_SAMPLES; 0 single-sampled)
+  // and allocates its layer, so that stats().edges says what the GPU gave
+  // before the first frame. draw() calls it itself for its framebuffer; a
+  // layer the GPU refuses falls back to the next strategy, with a warning.
+  bool prepareEdges(int width_px, int height_px, int target_samples, std::string& error);
 
   const ModelUploadStats& stats() const { return stats_; }
   // One line each, said once: what the renderer had to leave out or change.
@@ -138,6 +168,13 @@ class ModelRenderer {
   int self_shadow_lights_read_ = 0;
   ModelUploadStats stats_;
   std::vector<std::string> warnings_;
+  // What chooseEdgeAntialiasing said for the frame size below (the layer may
+  // have fallen back from it: stats_.edges is what is used).
+  EdgeAntialiasing edge_request_;
+  int edge_width_px_ = 0, edge_height_px_ = 0;
+  EdgeLayer edge_layer_;
+  // Every vertex lies in this box (W): what the layer is cut to.
+  glm::dvec3 bounds_min_w_{0.0}, bounds_max_w_{0.0};
 };
 
 // KHR_texture_transform's uv' = T R S uv as the 3x3 matrix the shader applies.

@@ -1292,10 +1292,12 @@ struct World::Impl {
   glm::dvec3 meshFloorRadiance(const glm::dvec3& point_w, const FrameState& fs, bool clipped) const {
     SceneObject ignored;
     glm::dvec3 radiance = groundRadiance(point_w, fs, ignored) * shadowFraction({point_w.x, point_w.y}, *fs.occluders);
+    // What the ball's camera knows of the floor is the floor itself, clipped
+    // as any radiance it sees (World::irradiance's lower hemisphere): not the
+    // floor as a clipped sky would light it.
     if (clipped) {
-      const ShadowContext& context = fs.occluders->shadow;
-      for (int c = 0; c < 3; ++c)
-        radiance[c] *= context.e_up_hdr[c] > 0.0 ? context.e_up_clipped[c] / context.e_up_hdr[c] : 0.0;
+      const double reflectance = scene.rig.probe_reflectance;
+      radiance = glm::min(radiance * exposure * reflectance, glm::dvec3(1.0)) / (reflectance * exposure);
     }
     return radiance;
   }

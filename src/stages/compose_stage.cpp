@@ -8,6 +8,20 @@
 
 namespace probelight {
 
+namespace {
+
+// report.json's model.edges: what the GPU gave for the model's edges.
+nlohmann::json edgeReport(const passes::ModelUploadStats& stats) {
+  return {{"strategy", passes::edgeStrategyName(stats.edges.strategy)},
+          {"samples", stats.edges.samples},
+          {"grid", stats.edges.grid},
+          {"requested_samples", stats.edges.requested_samples},
+          {"layer_bytes", stats.edge_layer_bytes},
+          {"reason", stats.edges.reason}};
+}
+
+}  // namespace
+
 const std::vector<std::uint8_t>& StatusOverlay::render(const std::string& text, int width, int height) {
   if (text == text_ && width == width_ && height == height_) return rgba_;
   text_ = text;
@@ -36,8 +50,15 @@ Status ComposeStage::init(const gles::Capabilities& capabilities, passes::CubeSt
   if (!compositor_.init(capabilities, passes::ObjectCompositorSettings{}, storage, error))
     return Status::runtimeFailure("GPU set-up failed: " + error);
   if (object_.isModel()) {
-    if (!model_renderer_.init(capabilities, storage, *object_.model, object_.world_from_model, {}, error))
+    passes::ModelRendererSettings settings;
+    settings.edge_samples = passes::kKioskEdgeSamples;
+    if (!model_renderer_.init(capabilities, storage, *object_.model, object_.world_from_model, settings, error))
       return Status::runtimeFailure("GPU set-up failed for " + object_.model->source + ": " + error);
+    // Every display draws the frame into a single-sampled FBO (display/):
+    // the layer is made now, so the report says what the GPU gave from the
+    // start; each draw checks its framebuffer again.
+    if (!model_renderer_.prepareEdges(camera_.width_px, camera_.height_px, 0, error))
+      return Status::runtimeFailure("GPU set-up failed for the model's edges: " + error);
     const passes::ModelUploadStats& stats = model_renderer_.stats();
     nlohmann::json& out = report_.extra["model"];
     out["file"] = object_.model->source;
@@ -50,6 +71,7 @@ Status ComposeStage::init(const gles::Capabilities& capabilities, passes::CubeSt
     out["index_bytes"] = stats.index_bytes;
     out["load_ms"] = object_.model->load_ms;
     out["upload_ms"] = stats.upload_ms;
+    out["edges"] = edgeReport(stats);
     nlohmann::json warnings = object_.model->warnings;
     for (const std::string& warning : model_renderer_.warnings()) warnings.push_back(warning);
     out["warnings"] = warnings;
@@ -76,6 +98,11 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
                                            object_.material, lighting, maps.maps(), error)
             : compositor_.drawMeshObject(camera_, track.pose, mesh_, object_.material, lighting, maps.maps(), error);
     if (!drawn) return Status::runtimeFailure(error);
+    if (object_.isModel()) {
+      // A draw into another kind of framebuffer may choose differently.
+      nlohmann::json edges = edgeReport(model_renderer_.stats());
+      if (nlohmann::json& reported = report_.extra["model"]["edges"]; reported != edges) reported = std::move(edges);
+    }
   }
   if (!status.empty()) {
     const auto& rgba = overlay_.render(status, camera_.width_px, camera_.height_px);
