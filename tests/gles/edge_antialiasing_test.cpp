@@ -125,11 +125,18 @@ TEST(EdgeAntialiasing, ProjectedBoundsHoldEveryPointOfTheBox) {
   std::mt19937 random(16);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   int cut = 0;
+  // Drawn one statement at a time: the order a constructor's arguments are
+  // evaluated in differs between compilers, and so would the boxes.
+  auto draw = [&] {
+    glm::dvec3 v;
+    for (int axis = 0; axis < 3; ++axis) v[axis] = unit(random);
+    return v;
+  };
   for (int trial = 0; trial < 200; ++trial) {
-    const glm::dvec3 eye(0.4 * unit(random) - 0.2, -0.15 - 0.3 * unit(random), 0.05 + 0.3 * unit(random));
+    const glm::dvec3 eye = glm::dvec3(-0.2, -0.15, 0.05) + glm::dvec3(0.4, -0.3, 0.3) * draw();
     const PoseCamFromWorld pose = test::lookAt(eye, {0.0, 0.0, 0.03});
-    const glm::dvec3 centre(0.2 * unit(random) - 0.1, 0.2 * unit(random) - 0.1, 0.05 * unit(random));
-    const glm::dvec3 half(0.005 + 0.06 * unit(random), 0.005 + 0.06 * unit(random), 0.005 + 0.06 * unit(random));
+    const glm::dvec3 centre = glm::dvec3(-0.1, -0.1, 0.0) + glm::dvec3(0.2, 0.2, 0.05) * draw();
+    const glm::dvec3 half = glm::dvec3(0.005) + 0.06 * draw();
     const passes::PixelRect rect = passes::projectedBounds(camera, pose, centre - half, centre + half, 0.01, 0);
     const bool whole = rect == passes::PixelRect{0, 0, camera.width_px, camera.height_px};
     int inside_frame = 0;
@@ -153,8 +160,10 @@ TEST(EdgeAntialiasing, ProjectedBoundsHoldEveryPointOfTheBox) {
       ++cut;
       // Tight: the lattice's own extent, plus a pixel of rounding, plus what
       // the distortion bows the bounding rectangle's corners out beyond the
-      // box's own image (a few pixels at this lens's strength).
-      EXPECT_LE(rect.width, 1.05 * (high_x - low_x + 1) + 4) << trial;
+      // box's own image (a few pixels at this lens's strength). Only for a
+      // box wholly in the frame: of one that leaves it, the sparse lattice
+      // misses the part between its last point inside and the frame's edge.
+      if (inside_frame == 9 * 9 * 9) EXPECT_LE(rect.width, 1.05 * (high_x - low_x + 1) + 4) << trial;
     }
   }
   EXPECT_GT(cut, 150) << "the bounds must cut the layer, not give the whole frame";
