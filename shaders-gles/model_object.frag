@@ -105,6 +105,54 @@ uniform sampler2D u_emissive_texture;
 uniform mat3 u_emissive_uv_transform;
 #endif
 
+#if defined(SELF_SHADOW_LIGHTS) || defined(NEAR_FLOOR)
+varying vec3 v_position_w;
+#endif
+
+#ifdef NEAR_FLOOR
+// The floor beside the model (ibl/near_floor.hpp): a specular direction
+// that goes down reads the maps where the ball's centre sees the ground
+// point it meets, darkened by the ground shadow's fraction there
+// (NEAR_FLOOR_SHADOW: passes/ground_shadow's texture over the square
+// centred at u_ground_region.xy, u_ground_region.z = 1 / its side).
+// Precision: the point is within metres of the origin and the distance
+// along the ray is held to NEAR_FLOOR_MAX_DISTANCE_M, so every term stays
+// well inside a 16-bit float's range; the direction is a unit vector.
+uniform vec3 u_ball_centre_w;
+uniform float u_ball_radius_m;
+uniform vec3 u_ball_to_eye_w;
+#ifdef NEAR_FLOOR_SHADOW
+uniform sampler2D u_ground_fraction;
+uniform vec3 u_ground_region;
+#endif
+
+vec3 nearFloorDirection(vec3 position, vec3 direction, out vec3 fraction) {
+  fraction = vec3(1.0);
+  if (direction.z >= 0.0) return direction;
+  float distance_m = min(max(position.z, 0.0) / -direction.z, NEAR_FLOOR_MAX_DISTANCE_M);
+  vec2 ground = position.xy + distance_m * direction.xy;
+#ifdef NEAR_FLOOR_SHADOW
+  vec2 uv = (ground - u_ground_region.xy) * u_ground_region.z + 0.5;
+  if (uv.x >= 0.0 && uv.x <= 1.0 && uv.y >= 0.0 && uv.y <= 1.0) fraction = texture2D(u_ground_fraction, uv).rgb;
+#endif
+  vec3 from_ball = vec3(ground, 0.0) - u_ball_centre_w;
+  float length_m = length(from_ball);
+  if (length_m <= 1e-3) return direction;
+  vec3 d = from_ball / length_m;
+  // The ball's own parallax: ibl::nearFloorLookup's fixed-point steps.
+  for (int step = 0; step < NEAR_FLOOR_BALL_STEPS; ++step) {
+    vec3 half_vector = d + u_ball_to_eye_w;
+    float half_length = length(half_vector);
+    if (half_length <= 1e-3) break;
+    from_ball = vec3(ground, 0.0) - (u_ball_centre_w + u_ball_radius_m * half_vector / half_length);
+    length_m = length(from_ball);
+    if (length_m <= 1e-3) break;
+    d = from_ball / length_m;
+  }
+  return d;
+}
+#endif
+
 #ifdef SELF_SHADOW_LIGHTS
 // The object's shadow on itself, in the ratio form the ground's shadow uses
 // (ibl/ground_shadow.hpp): the dome's lights carry the maps' energy, so the
@@ -117,7 +165,6 @@ uniform mat3 u_emissive_uv_transform;
 // model stays. Where the dome and the maps disagree the ratio is clamped
 // to [0, 1]. The lights' cones are not spread here: a self-shadow's edge
 // is the map's texel, softened by the 2x2 test.
-varying vec3 v_position_w;
 uniform sampler2D u_self_shadow_map[SELF_SHADOW_LIGHTS];
 // Rows of the light's clip_from_world folded into [0, 1]: uv.x, uv.y, depth01.
 uniform vec4 u_self_shadow_row0[SELF_SHADOW_LIGHTS];
@@ -238,6 +285,10 @@ void main() {
   for (int k = 0; k < 4; ++k) diffuse += u_clipped_diffuse_rgb[k] * max(dot(n, u_clipped_direction_w[k]), 0.0);
 
   vec3 mirror = reflect(-to_eye, n);
+  vec3 floor_fraction = vec3(1.0);
+#ifdef NEAR_FLOOR
+  mirror = nearFloorDirection(v_position_w, mirror, floor_fraction);
+#endif
   float position = clamp(ladderPosition(roughness * roughness), float(RUNG_FIRST), float(RUNG_LAST));
   vec3 specular = vec3(0.0);
 #if RUNG_FIRST == 0
@@ -252,6 +303,7 @@ void main() {
   specular += rungWeight(2.0, position) *
               sampleCubeBilinear(u_glossy1_map, mirror, u_glossy1_face_size, u_glossy1_scale).rgb;
 #endif
+  specular *= floor_fraction;
 #if RUNG_LAST == DIFFUSE_RUNG
   specular += rungWeight(float(DIFFUSE_RUNG), position) * diffuse;
 #endif

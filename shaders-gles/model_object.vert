@@ -36,7 +36,7 @@ uniform vec2 u_depth_range_m;  // near, far
 
 varying vec3 v_normal_w;
 varying vec3 v_to_eye_w;
-#ifdef SELF_SHADOW_LIGHTS
+#if defined(SELF_SHADOW_LIGHTS) || defined(NEAR_FLOOR)
 varying vec3 v_position_w;
 #endif
 
@@ -50,7 +50,7 @@ void main() {
   gl_Position = vec4(ndc * z, depth_ndc * z, z);
   v_normal_w = a_normal_w;
   v_to_eye_w = u_eye_w - a_position_w;
-#ifdef SELF_SHADOW_LIGHTS
+#if defined(SELF_SHADOW_LIGHTS) || defined(NEAR_FLOOR)
   v_position_w = a_position_w;
 #endif
 #ifdef HAS_TANGENT

@@ -120,10 +120,14 @@ class Analyzer {
     if (!render_) return sceneObjectFromConfig(settings_, object_);
     object_ = SceneObject{};
     if (render_->object == "model") {
-      auto model = std::make_shared<model::MeshModel>();
-      std::string error;
-      if (!model::loadGltfModel(render_->model_path, {}, *model, error)) return Status::badInput(error + " (--model)");
-      for (const std::string& warning : model->warnings) log_ << "probelight: warning: " << warning << "\n";
+      std::shared_ptr<const model::MeshModel> model = render_->model;
+      if (!model) {
+        auto loaded = std::make_shared<model::MeshModel>();
+        std::string error;
+        if (!model::loadGltfModel(render_->model_path, {}, *loaded, error)) return Status::badInput(error + " (--model)");
+        for (const std::string& warning : loaded->warnings) log_ << "probelight: warning: " << warning << "\n";
+        model = std::move(loaded);
+      }
       object_ = modelSceneObject(std::move(model), {render_->at_w, glm::radians(render_->yaw_deg), render_->scale});
       return Status::ok();
     }
@@ -389,7 +393,7 @@ class Analyzer {
   Status renderComposite() {
     const SceneObject& object = object_;
     ShadowsStage shadows(settings_, object.shape, report_);
-    ComposeStage compose(object, camera_, report_, settings_.gpu_finish);
+    ComposeStage compose(object, camera_, rig_, report_, settings_.gpu_finish);
     gles::RenderTarget target;
     std::string error;
     // The 8-bit maps as the kiosk keeps them, plus the light they clipped.

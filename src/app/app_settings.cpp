@@ -102,6 +102,7 @@ AppSettings loadAppSettings(const std::string& path) {
         (std::filesystem::path(path).parent_path() / settings.object.model_path).lexically_normal().string();
   settings.object.yaw_deg = object.readDouble("yaw", settings.object.yaw_deg, Range::closed(-360.0, 360.0));
   settings.object.scale = object.readDouble("scale", settings.object.scale, Range::openClosed(0.0, 1000.0));
+  settings.object.self_shadow = object.readBool("self_shadow", settings.object.self_shadow);
   object.rejectUnknownFields();
 
   ConfigReader recalibration = file.section("recalibration");

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <map>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -87,12 +88,21 @@ AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args);
 
 // `probelight render`: analyze's flags, plus the virtual object to put into
 // the frame, standing on the ground of W.
+}  // namespace probelight
+namespace probelight::model {
+struct MeshModel;
+}
+namespace probelight {
+
 struct RenderOptions {
   AnalyzeOptions frame;        // --frame, --camera, --rig, --out, --config
   std::string object = "sphere";  // sphere | box | model
   double radius_m = 0.0;       // sphere: required
   glm::dvec3 box_size_m{0.0};  // box: --size X,Y,Z (required)
   std::string model_path;      // --model FILE: a glTF model (object "model")
+  // Object "model" already in memory, in place of model_path's file: a
+  // caller's own model (the accuracy tests' generated spheres and bowls).
+  std::shared_ptr<const model::MeshModel> model;
   double scale = 1.0;          // model: --scale
   double yaw_deg = 0.0;        // box, model: turned about +Z
   glm::dvec2 at_w{0.0};        // --at X,Y: where it stands

@@ -38,7 +38,7 @@ glm::vec3 shadeMetallicRoughness(const glm::vec3& normal_w, const glm::vec3& to_
                                  const MetallicRoughnessSurface& surface, const CubeMapRGB& diffuse_map,
                                  const CubeMapRGB& reflection_map, const std::vector<const CubeMapRGB*>& glossy_maps,
                                  const std::vector<double>& rung_alphas, const EnvironmentBrdfTable& brdf_table,
-                                 const SceneLighting& lighting) {
+                                 const SceneLighting& lighting, const NearFloorShading* near_floor) {
   const float metallic = std::clamp(surface.metallic, 0.0f, 1.0f);
   const float roughness = std::clamp(surface.roughness, 0.0f, 1.0f);
   const glm::vec3 base = glm::clamp(surface.base_color, 0.0f, 1.0f);
@@ -53,14 +53,21 @@ glm::vec3 shadeMetallicRoughness(const glm::vec3& normal_w, const glm::vec3& to_
   glm::vec3 diffuse = diffuse_map.face_size > 0 ? diffuse_map.sampleBilinear(glm::dvec3(normal_w)) : glm::vec3(0);
   for (int k = 0; k < SceneLighting::kMaxClippedLights; ++k)
     diffuse += lighting.clipped_diffuse_rgb[k] * std::max(0.0f, glm::dot(normal_w, lighting.clipped_direction_w[k]));
-  const glm::vec3 mirror_w = glm::reflect(-to_eye_w, normal_w);
+  glm::vec3 mirror_w = glm::reflect(-to_eye_w, normal_w);
+  glm::vec3 floor_fraction(1.0f);
+  if (near_floor != nullptr) {
+    const NearFloorLookup lookup = nearFloorLookup(near_floor->point_w, mirror_w, near_floor->ball);
+    mirror_w = lookup.map_direction_w;
+    if (lookup.meets_ground && near_floor->fraction) floor_fraction = near_floor->fraction(glm::vec2(lookup.ground_point_w));
+  }
   const int last = static_cast<int>(rung_alphas.size()) - 1;
   const auto rung = [&](int k) -> glm::vec3 {
     if (k >= last) return diffuse;
     const CubeMapRGB* map = k == 0 ? &reflection_map
                                    : (k - 1 < static_cast<int>(glossy_maps.size()) ? glossy_maps[static_cast<size_t>(k - 1)]
                                                                                   : nullptr);
-    return map != nullptr && map->face_size > 0 ? map->sampleBilinear(glm::dvec3(mirror_w)) : glm::vec3(0);
+    return map != nullptr && map->face_size > 0 ? floor_fraction * map->sampleBilinear(glm::dvec3(mirror_w))
+                                                : glm::vec3(0);
   };
   const ReflectionLadderBlend blend = specularLadderBlend(roughness, rung_alphas);
   glm::vec3 specular = rung(blend.lower);

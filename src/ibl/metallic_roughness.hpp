@@ -25,16 +25,23 @@
 // reads the two rungs whose alphas bracket its own, linearly in alpha;
 // rougher than the diffuse rung reads the diffuse map alone.
 //
+// The near floor (ibl/near_floor.hpp): where the specular rungs' direction
+// r goes down, they are read where the ball sees the ground point r meets,
+// times the ground shadow's fraction there. The diffuse rung (about the
+// normal) is left as it is.
+//
 // Occlusion (the file's baked ambient occlusion) scales all of the light:
 // every bit of it is image-based, none is a punctual light it would spare.
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "ibl/cube_map.hpp"
 #include "ibl/environment_brdf.hpp"
+#include "ibl/near_floor.hpp"
 #include "ibl/surface_shading.hpp"
 
 namespace probelight::ibl {
@@ -68,12 +75,20 @@ struct RungRange {
 };
 RungRange specularRungRange(float min_roughness, float max_roughness, const std::vector<double>& rung_alphas);
 
+// The near floor for one surface point: the point, the ball's centre, and
+// the ground shadow's fraction at a ground point (1 where there is none).
+struct NearFloorShading {
+  glm::vec3 point_w{0.0f};
+  NearFloorBall ball;
+  std::function<glm::vec3(const glm::vec2& ground_point_w)> fraction;
+};
+
 // The lit colour in linear light. normal_w and to_eye_w unit. glossy_maps:
 // sharpest first, their exponents the ones rung_alphas were made from.
 glm::vec3 shadeMetallicRoughness(const glm::vec3& normal_w, const glm::vec3& to_eye_w,
                                  const MetallicRoughnessSurface& surface, const CubeMapRGB& diffuse_map,
                                  const CubeMapRGB& reflection_map, const std::vector<const CubeMapRGB*>& glossy_maps,
                                  const std::vector<double>& rung_alphas, const EnvironmentBrdfTable& brdf_table,
-                                 const SceneLighting& lighting);
+                                 const SceneLighting& lighting, const NearFloorShading* near_floor = nullptr);
 
 }  // namespace probelight::ibl

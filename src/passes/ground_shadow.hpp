@@ -83,6 +83,10 @@ class GroundShadow {
   const std::vector<SelfShadowLight>& selfShadowLights() const { return self_shadow_lights_; }
   int shadowMapSizePx() const { return settings_.shadow_map_size_px; }
   const ibl::GroundRegion& region() const { return region_; }
+  // The fraction texture (RGBA8, LINEAR, over region()), for a model's
+  // reflection of the floor beside it (ModelRenderer::setNearFloor); only
+  // meaningful while hasShadow().
+  GLuint fractionTexture() const { return ground_texture_.id(); }
   int shadowPassesLastUpdate() const { return shadow_passes_last_update_; }
   bool packedDepth() const { return packed_depth_; }
   std::string depthStorageDescription() const;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -10,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ibl/metallic_roughness.hpp"
+#include "ibl/near_floor.hpp"
 #include "model/vertex_attributes.hpp"
 #include "passes/object_uniforms.hpp"
 
@@ -174,7 +176,7 @@ bool ModelRenderer::init(const gles::Capabilities& capabilities, CubeStorage sto
   // Every piece's program with the mirror-only ladder now, so a shader that
   // does not build fails here, not mid-run.
   for (const Piece& piece : pieces_)
-    if (programFor(piece, 0, 0, 0, 0, error) == nullptr) return false;
+    if (programFor(piece, 0, 0, 0, 0, false, error) == nullptr) return false;
   stats_.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return gles::checkGl("ModelRenderer::init", error);
 }
@@ -357,13 +359,18 @@ bool ModelRenderer::uploadPrimitive(const model::Primitive& source, std::size_t 
 }
 
 const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
-                                               int self_shadow_lights, std::string& error) {
+                                               int self_shadow_lights, bool floor_shadow, std::string& error) {
   std::string defines = cubeStorageDefines(storage_) + piece.defines + "#define GLOSSY_LEVELS " +
                         std::to_string(glossy_levels) + "\n#define RUNG_FIRST " + std::to_string(rung_first) +
                         "\n#define RUNG_LAST " + std::to_string(rung_last) + "\n";
   if (self_shadow_lights > 0) {
     defines += "#define SELF_SHADOW_LIGHTS " + std::to_string(self_shadow_lights) + "\n";
     if (self_shadow_packed_) defines += "#define SHADOW_DEPTH_PACKED\n";
+  }
+  if (near_floor_) {
+    defines += "#define NEAR_FLOOR\n#define NEAR_FLOOR_MAX_DISTANCE_M " + std::to_string(ibl::kNearFloorMaxDistance_m) +
+               "\n#define NEAR_FLOOR_BALL_STEPS " + std::to_string(ibl::kNearFloorBallSteps) + "\n";
+    if (floor_shadow) defines += "#define NEAR_FLOOR_SHADOW\n";
   }
   if (auto found = programs_.find(defines); found != programs_.end()) return &found->second;
   auto program = gles::Program::fromEmbedded("model_object.vert", "model_object.frag", defines, error);
@@ -413,6 +420,14 @@ bool ModelRenderer::prepareEdges(int width_px, int height_px, int target_samples
   return gles::checkGl("ModelRenderer::prepareEdges", error);
 }
 
+void ModelRenderer::setNearFloor(bool enabled, const glm::dvec3& ball_centre_w, double ball_radius_m,
+                                 const GroundShadow* shadow) {
+  near_floor_ = enabled;
+  ball_centre_w_ = glm::vec3(ball_centre_w);
+  ball_radius_m_ = static_cast<float>(ball_radius_m);
+  near_floor_shadow_ = shadow;
+}
+
 void ModelRenderer::setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth) {
   self_shadow_ = lights;
   self_shadow_map_size_px_ = map_size_px;
@@ -430,6 +445,7 @@ bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld&
   for (int level = 0; level < glossy_levels; ++level)
     exponents.push_back(environment.settings().glossy_exponent[static_cast<size_t>(level)]);
   const std::vector<double> rung_alphas = ibl::specularRungAlphas(exponents);
+
 
   std::vector<const Piece*> opaque, blended;
   for (const Piece& piece : pieces_)
@@ -504,13 +520,19 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
   int units_used = 2;  // the diffuse map and the BRDF table
   for (int rung = range.first; rung <= range.last; ++rung) units_used += rung < glossy_levels + 1 ? 1 : 0;
   for (bool used : piece.slot_used) units_used += used ? 1 : 0;
+  // The floor's shadow in the reflections before the self-shadow lights:
+  // one unit against one of eight lights.
+  const bool floor_shadow = near_floor_ && near_floor_shadow_ != nullptr && near_floor_shadow_->hasShadow() &&
+                            units_used < capabilities_.max_fragment_texture_units;
+  units_used += floor_shadow ? 1 : 0;
   int self_shadow_lights = 0;
   if (self_shadow_ != nullptr && self_shadow_map_size_px_ > 0)
     self_shadow_lights = std::max(0, std::min({static_cast<int>(self_shadow_->size()),
                                                capabilities_.max_fragment_texture_units - units_used,
                                                (capabilities_.max_fragment_uniform_vectors - 48) / 6}));
   self_shadow_lights_read_ = self_shadow_lights;
-  const gles::Program* found = programFor(piece, range.first, range.last, glossy_levels, self_shadow_lights, error);
+  const gles::Program* found =
+      programFor(piece, range.first, range.last, glossy_levels, self_shadow_lights, floor_shadow, error);
   if (found == nullptr) return false;
   const gles::Program& program = *found;
   program.use();
@@ -568,6 +590,25 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
     glUniform3fv(program.uniform("u_self_shadow_direction"), n, glm::value_ptr(directions[0]));
     glUniform3fv(program.uniform("u_self_shadow_rgb"), n, glm::value_ptr(rgb[0]));
     glUniform2fv(program.uniform("u_self_shadow_texel"), n, glm::value_ptr(texels[0]));
+  }
+  if (near_floor_) {
+    glUniform3fv(program.uniform("u_ball_centre_w"), 1, glm::value_ptr(ball_centre_w_));
+    glUniform1f(program.uniform("u_ball_radius_m"), ball_radius_m_);
+    // The camera that sees the ball now: the one the maps were last made
+    // from, give or take a steady camera's drift (maps_stage remakes them
+    // only for a steady view).
+    const glm::dvec3 to_eye = pose.cameraCenterWorld() - glm::dvec3(ball_centre_w_);
+    const double to_eye_length = glm::length(to_eye);
+    const glm::vec3 to_eye_w = to_eye_length > 0.0 ? glm::vec3(to_eye / to_eye_length) : glm::vec3(0.0f, 0.0f, 1.0f);
+    glUniform3fv(program.uniform("u_ball_to_eye_w"), 1, glm::value_ptr(to_eye_w));
+    if (floor_shadow) {
+      const ibl::GroundRegion& region = near_floor_shadow_->region();
+      glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
+      glBindTexture(GL_TEXTURE_2D, near_floor_shadow_->fractionTexture());
+      glUniform1i(program.uniform("u_ground_fraction"), unit++);
+      glUniform3f(program.uniform("u_ground_region"), static_cast<float>(region.centre_w.x),
+                  static_cast<float>(region.centre_w.y), static_cast<float>(0.5 / region.half_size_m));
+    }
   }
   glActiveTexture(GL_TEXTURE0);
 

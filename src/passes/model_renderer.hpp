@@ -109,6 +109,14 @@ class ModelRenderer {
   void setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth);
   int selfShadowLightsRead() const { return self_shadow_lights_read_; }
 
+  // The floor beside the model in its reflections (ibl/near_floor.hpp):
+  // specular directions that go down are read where the maps, made from the
+  // ball at ball_centre_w (as the camera sees it now), show the ground they
+  // meet, darkened by `shadow`'s fraction there (null, or one without a
+  // shadow: not darkened). Until set again; off by default (the maps read
+  // as they are).
+  void setNearFloor(bool enabled, const glm::dvec3& ball_centre_w, double ball_radius_m, const GroundShadow* shadow);
+
   // Chooses the edge anti-aliasing for frames of width_px x height_px drawn
   // into a framebuffer with target_samples (GL_SAMPLES; 0 single-sampled)
   // and allocates its layer, so that stats().edges says what the GPU gave
@@ -148,7 +156,7 @@ class ModelRenderer {
                        std::string& error);
   const gles::Texture* textureFor(const model::MeshModel& model, const model::TextureSlot& slot, std::string& error);
   const gles::Program* programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
-                                  int self_shadow_lights, std::string& error);
+                                  int self_shadow_lights, bool floor_shadow, std::string& error);
   bool drawPiece(const Piece& piece, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                  const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
                  const std::vector<double>& rung_alphas, std::string& error);
@@ -166,6 +174,10 @@ class ModelRenderer {
   int self_shadow_map_size_px_ = 0;
   bool self_shadow_packed_ = false;
   int self_shadow_lights_read_ = 0;
+  bool near_floor_ = false;
+  glm::vec3 ball_centre_w_{0.0f};
+  float ball_radius_m_ = 0.0f;
+  const GroundShadow* near_floor_shadow_ = nullptr;
   ModelUploadStats stats_;
   std::vector<std::string> warnings_;
   // What chooseEdgeAntialiasing said for the frame size below (the layer may

@@ -36,6 +36,8 @@ VirtualOccluder meshOccluder(std::shared_ptr<const model::MeshModel> model, cons
   VirtualOccluder mesh;
   mesh.shape = VirtualOccluder::Shape::kMesh;
   mesh.triangles = std::make_shared<const TriangleScene>(*model, world_from_model);
+  for (const model::Material& material : model->materials)
+    mesh.has_mask_material = mesh.has_mask_material || material.alpha_mode == model::AlphaMode::kMask;
   mesh.model = std::move(model);
   const WorldBounds bounds = mesh.triangles->bounds();
   if (!bounds.empty()) mesh.position_w = 0.5 * glm::dvec2(bounds.min_w + bounds.max_w);
@@ -65,6 +67,16 @@ std::optional<TriangleHit> intersectMesh(const VirtualOccluder& mesh, const glm:
     from = origin + travelled * dir;
   }
   return std::nullopt;
+}
+
+bool occluderBlocks(const VirtualOccluder& occluder, const glm::dvec3& origin, const glm::dvec3& dir, double t_max) {
+  if (occluder.shape == VirtualOccluder::Shape::kMesh) {
+    if (!occluder.triangles) return false;
+    if (!occluder.has_mask_material) return occluder.triangles->occluded(origin, dir, t_max);
+    return intersectMesh(occluder, origin, dir, t_max).has_value();
+  }
+  const std::optional<double> t = intersectOccluder(occluder, origin, dir);
+  return t && *t < t_max;
 }
 
 OccluderBound occluderBound(const VirtualOccluder& occluder) {

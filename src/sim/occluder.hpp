@@ -3,6 +3,7 @@
 // (World::renderWithOccluders). Plain geometry: no lighting here.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <optional>
 
@@ -28,6 +29,9 @@ struct VirtualOccluder {
   // placed in W. position_w is unused: the triangles are where they are.
   std::shared_ptr<const model::MeshModel> model;
   std::shared_ptr<const TriangleScene> triangles;
+  // kMesh: some material is MASK, so a shadow ray must look at each hit's
+  // texel (meshOccluder sets it).
+  bool has_mask_material = false;
   // kMesh, in renderWithOccluders: paths per shaded camera sample (an edge
   // pixel's sub-samples share them), and how many times a path may bounce
   // off the model itself before it ends (the interreflection the truth
@@ -35,9 +39,12 @@ struct VirtualOccluder {
   int path_samples = 64;
   int max_bounces = 4;
   // kMesh, in renderWithOccluders: light the model with what an 8-bit camera
-  // can know through the ball (each sky radiance clipped as
-  // World::irradiance's `clipped`, the floor lit by the clipped E_up)
-  // rather than the full HDR sky. The frame around it is unchanged.
+  // can know through the ball rather than the full HDR sky: each sky
+  // direction scaled by the clip of the ball pixel that shows it in this
+  // frame (a lamp smaller than a pixel clips the whole pixel; directions
+  // behind the ball clipped one by one, as World::irradiance's `clipped`),
+  // and the floor clipped as the camera clips it. The frame around it is
+  // unchanged.
   bool clipped_lighting = false;
 };
 
@@ -50,6 +57,13 @@ VirtualOccluder meshOccluder(std::shared_ptr<const model::MeshModel> model, cons
 // (as the kiosk discards them). BLEND surfaces count as opaque.
 std::optional<TriangleHit> intersectMesh(const VirtualOccluder& mesh, const glm::dvec3& origin, const glm::dvec3& dir,
                                          double t_max);
+
+// Whether the ray from origin along dir (unit) meets the occluder's surface
+// at all, nearer than t_max: a shadow ray. For a mesh without MASK
+// materials the BVH stops at the first triangle it finds (any hit), where
+// intersectMesh must go on to the closest.
+bool occluderBlocks(const VirtualOccluder& occluder, const glm::dvec3& origin, const glm::dvec3& dir,
+                    double t_max = std::numeric_limits<double>::infinity());
 
 // Nearest hit distance t > 0 along origin + t * dir (dir unit) with the occluder's surface, and the outward unit normal
 // there (kMesh: the shading normal, turned towards the ray's origin).

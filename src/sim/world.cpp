@@ -440,7 +440,7 @@ bool blockedAlong(const std::vector<OccluderCone>& cones, const glm::dvec3& poin
   for (const OccluderCone& cone : cones) {
     const Visibility v = classify(cone, dir, 0.0, 0.0, 1.0);
     if (v == Visibility::kBlocked) return true;
-    if (v == Visibility::kCut && intersectOccluder(*cone.occluder, point_w, dir)) return true;
+    if (v == Visibility::kCut && occluderBlocks(*cone.occluder, point_w, dir)) return true;
   }
   return false;
 }
@@ -614,18 +614,27 @@ struct SkySampler {
   }
   double pdf(const glm::dvec3& dir) const {
     if (!(dir.z > 0.0)) return 0.0;
+    const size_t i = upperCellOf(dir);
+    return probability[i] / solidAngle(directionGrid()[i]);
+  }
+  // The upper-hemisphere cell holding dir (dir.z > 0).
+  static size_t upperCellOf(const glm::dvec3& dir) {
     const double theta = std::acos(std::clamp(dir.z, -1.0, 1.0));
     const double phi = std::atan2(dir.y, dir.x);
     const int row = std::clamp(static_cast<int>(theta / kPi * kGridHeight), 0, kUpperRows - 1);
     const int col = std::clamp(static_cast<int>((phi + kPi) / (2.0 * kPi) * kGridWidth), 0, kGridWidth - 1);
-    const size_t i = static_cast<size_t>(row) * kGridWidth + static_cast<size_t>(col);
-    return probability[i] / solidAngle(directionGrid()[i]);
+    return static_cast<size_t>(row) * kGridWidth + static_cast<size_t>(col);
   }
 };
 
 struct OccluderFrame {
   ShadowContext shadow;
   SkySampler sky_hdr, sky_clipped;  // for meshes' path tracing; built only when a mesh needs them
+  // Per upper-hemisphere cell, what the ball's pixel showing it keeps of
+  // its light after the camera's clip (1 unclipped; per channel), for a
+  // mesh lit by the 8-bit-knowable sky; negative where no ball pixel shows
+  // the cell (behind the ball), which keeps the per-direction clip.
+  std::vector<glm::dvec3> sky_clip_scale;
   std::vector<glm::dvec3> irradiance_by_normal;  // scene units, kIrradianceTableHeight rows (theta 0..pi) x width (phi)
   mutable std::mutex node_mutex;
   mutable std::unordered_map<std::uint64_t, glm::dvec3> node_fraction;  // hdr fraction by packed grid index
@@ -654,6 +663,7 @@ struct FrameState {
   glm::dvec3 ground_radiance_per_albedo;              // E_up / pi
   std::array<glm::dvec3, kPostAzimuthSteps> post_radiance;  // by world azimuth of the post's normal
   const OccluderFrame* occluders = nullptr;           // renderWithOccluders only
+  bool occluders_only = false;                        // PixelWindow::occluders_only
 };
 
 }  // namespace
@@ -837,6 +847,10 @@ struct World::Impl {
     bool white = false;
     int occluder = -1;
     const double t = firstHit(dir, fs, object, &occluder);
+    if (fs.occluders_only && object != SceneObject::kOccluder) {
+      if (edge_class) *edge_class = classOf(object, white, occluder);
+      return glm::dvec3(0.0);
+    }
     glm::dvec3 radiance = shadeHit(dir, fs, t, object, white, occluder, sample_share);
     if (edge_class) *edge_class = classOf(object, white, occluder);
     return radiance;
@@ -1238,8 +1252,73 @@ struct World::Impl {
     return fraction / weight_sum;
   }
 
-  std::unique_ptr<OccluderFrame> occluderFrame(const LightingState& state,
-                                               const std::vector<VirtualOccluder>& occluders) const {
+  // What an 8-bit camera can know of the sky through the ball, direction
+  // by direction: the camera clips each of the ball's pixels, i.e. the mean
+  // of the light over the pixel's footprint of directions, not each
+  // direction's own light. A lamp smaller than a pixel clips the whole
+  // pixel: the kiosk then knows the pixel's clipped value, spread over its
+  // directions, which is more than the lamp's own directions clipped one
+  // by one (those give the lamp only its own solid angle's worth of the
+  // clip). So each cell's light is scaled by its pixel's clip ratio,
+  // min(1, 1 / v) per channel with v the pixel's unclipped camera-linear
+  // value (the ball's reflectance in it), found by tracing the ball's
+  // pixels in this frame's view. The cell's pixel is where the ball
+  // reflects the cell's direction to the eye: the point whose normal halves
+  // the direction and the way to the eye (fixed-point steps from the
+  // centre's). Cells behind the ball (facing away from the eye) or out of
+  // the frame get -1.
+  std::vector<glm::dvec3> ballPixelClipScale(const FrameState& fs) const {
+    const RigGeometry& rig = scene.rig;
+    const int width = scene.camera.width_px, height = scene.camera.height_px;
+    const ProbeOutline outline = probeOutline(scene.camera, fs.pose, rig.probe_center_w, rig.probe_radius_m);
+    const size_t cells = static_cast<size_t>(kUpperRows) * kGridWidth;
+    std::vector<glm::dvec3> scale(cells, glm::dvec3(-1.0));
+    if (!outline.valid) return scale;
+    World::PixelWindow window{width, height, 0, 0, false};
+    for (const glm::dvec2& p : outline.polygon_px) {
+      window.x_begin = std::min(window.x_begin, static_cast<int>(std::floor(p.x)) - 1);
+      window.y_begin = std::min(window.y_begin, static_cast<int>(std::floor(p.y)) - 1);
+      window.x_end = std::max(window.x_end, static_cast<int>(std::ceil(p.x)) + 2);
+      window.y_end = std::max(window.y_end, static_cast<int>(std::ceil(p.y)) + 2);
+    }
+    std::vector<glm::dvec3> linear(static_cast<size_t>(width) * height, glm::dvec3(0.0));
+    std::vector<std::uint8_t> shows_ball(linear.size(), 0);
+    FrameState plain = fs;
+    plain.occluders = nullptr;  // the ball's reflection ignores the occluders
+    traceFrame(plain, &window, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>& objects) {
+      linear[pixel] = exposure * sum;
+      shows_ball[pixel] = std::find(objects.begin(), objects.end(), SceneObject::kProbe) != objects.end();
+    });
+    const glm::dvec3& centre = rig.probe_center_w;
+    const UpperCellGeometry& geometry = upperCellGeometry();
+    std::vector<glm::dvec3> points(cells);
+    std::vector<std::uint8_t> facing(cells, 0);
+    for (size_t i = 0; i < cells; ++i) {
+      const glm::dvec3& dir = geometry.centre_dirs[i];
+      glm::dvec3 to_eye = glm::normalize(fs.eye - centre), normal(0.0, 0.0, 1.0);
+      for (int step = 0; step < 4; ++step) {
+        const glm::dvec3 half = dir + to_eye;
+        if (!(glm::length(half) > 1e-9)) break;
+        normal = glm::normalize(half);
+        to_eye = glm::normalize(fs.eye - (centre + rig.probe_radius_m * normal));
+      }
+      points[i] = centre + rig.probe_radius_m * normal;
+      facing[i] = glm::dot(normal, to_eye) > 1e-6;
+    }
+    const std::vector<glm::dvec2> pixels = projectWorldPoints(scene.camera, fs.pose, points);
+    for (size_t i = 0; i < cells; ++i) {
+      if (!facing[i]) continue;
+      const long x = std::lround(pixels[i].x), y = std::lround(pixels[i].y);
+      if (x < 0 || y < 0 || x >= width || y >= height) continue;
+      const size_t pixel = static_cast<size_t>(y) * width + static_cast<size_t>(x);
+      if (!shows_ball[pixel]) continue;
+      for (int c = 0; c < 3; ++c) scale[i][c] = linear[pixel][c] > 1.0 ? 1.0 / linear[pixel][c] : 1.0;
+    }
+    return scale;
+  }
+
+  std::unique_ptr<OccluderFrame> occluderFrame(const FrameState& fs, const std::vector<VirtualOccluder>& occluders) const {
+    const LightingState& state = fs.lighting;
     auto frame = std::make_unique<OccluderFrame>();
     frame->shadow = shadowContext(state, occluders);
     frame->irradiance_by_normal.assign(static_cast<size_t>(kIrradianceTableWidth) * kIrradianceTableHeight, glm::dvec3(0.0));
@@ -1259,8 +1338,16 @@ struct World::Impl {
     bool hdr_needed = false, clipped_needed = false;
     for (const VirtualOccluder& occluder : occluders)
       if (occluder.shape == VirtualOccluder::Shape::kMesh) (occluder.clipped_lighting ? clipped_needed : hdr_needed) = true;
-    if (hdr_needed) frame->sky_hdr.build(grid.hdr);
-    if (clipped_needed) frame->sky_clipped.build(grid.clipped);
+    // The HDR sampler also draws the floor's shadow rays (meshFloorRadiance),
+    // whatever light the model is shaded with.
+    if (hdr_needed || clipped_needed) frame->sky_hdr.build(grid.hdr);
+    if (clipped_needed) {
+      frame->sky_clip_scale = ballPixelClipScale(fs);
+      std::vector<glm::dvec3> clipped = grid.clipped;
+      for (size_t i = 0; i < frame->sky_clip_scale.size(); ++i)
+        if (frame->sky_clip_scale[i].x >= 0.0) clipped[i] = grid.hdr[i] * frame->sky_clip_scale[i];
+      frame->sky_clipped.build(clipped);
+    }
     return frame;
   }
 
@@ -1281,23 +1368,59 @@ struct World::Impl {
   // by the floor (the floor is lit by the sky alone, as in render()).
 
   // The sky along dir (unit, upward), scene units: the full HDR, or what an
-  // 8-bit camera can know of it through the ball.
+  // 8-bit camera can know of it through the ball (ballPixelClipScale; where
+  // no pixel shows it, the direction's own light clipped).
   glm::dvec3 meshSkyRadiance(const glm::dvec3& dir, const FrameState& fs, bool clipped) const {
     const glm::dvec3 radiance = environmentRadiance(dir, fs.lighting);
     if (!clipped) return radiance;
+    const std::vector<glm::dvec3>& scale = fs.occluders->sky_clip_scale;
+    if (!scale.empty() && dir.z > 0.0) {
+      const glm::dvec3& s = scale[SkySampler::upperCellOf(dir)];
+      if (s.x >= 0.0) return radiance * s;
+    }
     const double reflectance = scene.rig.probe_reflectance;
     return glm::min(radiance * exposure * reflectance, glm::dvec3(1.0)) / (reflectance * exposure);
   }
 
-  glm::dvec3 meshFloorRadiance(const glm::dvec3& point_w, const FrameState& fs, bool clipped) const {
+  // The floor at point_w as a path from the model meets it: the world's
+  // Lambertian floor, lit by the sky less what the occluders hide from it.
+  // The hidden share is estimated by one shadow ray towards a direction
+  // drawn from the sky's brightness (unbiased: E_hidden = E[L cos V / pdf]),
+  // not read from the exact ground-shadow grid the visible floor uses: the
+  // paths reach thousands of floor points under and around a model, and
+  // the grid's exact nodes there (thousands of rays each) cost the truth
+  // frame tens of seconds, where one ray a path adds noise the path's own
+  // sampling already has.
+  glm::dvec3 meshFloorRadiance(const glm::dvec3& point_w, const FrameState& fs, bool clipped, double u1, double u2,
+                               double u3) const {
     SceneObject ignored;
-    glm::dvec3 radiance = groundRadiance(point_w, fs, ignored) * shadowFraction({point_w.x, point_w.y}, *fs.occluders);
+    glm::dvec3 radiance = groundRadiance(point_w, fs, ignored);
     // What the ball's camera knows of the floor is the floor itself, clipped
     // as any radiance it sees (World::irradiance's lower hemisphere): not the
-    // floor as a clipped sky would light it.
+    // floor as a clipped sky would light it. The clip is taken on the
+    // unshadowed floor and scales the estimate (a shadow only darkens: the
+    // same as clipping the shadowed floor wherever the open floor is under
+    // the clip, as the camera's exposure keeps it), so that a noisy
+    // estimate is never bent by it.
     if (clipped) {
       const double reflectance = scene.rig.probe_reflectance;
       radiance = glm::min(radiance * exposure * reflectance, glm::dvec3(1.0)) / (reflectance * exposure);
+    }
+    double pdf = 0.0;
+    const glm::dvec3 to_sky = fs.occluders->sky_hdr.sample(u1, u2, u3, pdf);
+    if (pdf > 0.0 && to_sky.z > 0.0) {
+      bool hidden = false;
+      for (const VirtualOccluder& occluder : fs.occluders->shadow.occluders)
+        if (occluderBlocks(occluder, point_w, to_sky)) {
+          hidden = true;
+          break;
+        }
+      if (hidden) {
+        const glm::dvec3 e_up = kPi * fs.ground_radiance_per_albedo;
+        const glm::dvec3 hidden_irradiance = environmentRadiance(to_sky, fs.lighting) * to_sky.z / pdf;
+        for (int c = 0; c < 3; ++c)
+          radiance[c] *= e_up[c] > 0.0 ? 1.0 - hidden_irradiance[c] / e_up[c] : 1.0;
+      }
     }
     return radiance;
   }
@@ -1350,7 +1473,7 @@ struct World::Impl {
         const glm::dvec3 to_sky = sky.sample(uniform(), uniform(), uniform(), sky_pdf);
         const glm::dvec3 f_sky = gltf_brdf::evaluate(at.normal, view, to_sky, material);
         if (sky_pdf > 0.0 && (f_sky.r > 0.0 || f_sky.g > 0.0 || f_sky.b > 0.0) &&
-            !intersectMesh(mesh, at.point_w, to_sky, std::numeric_limits<double>::infinity())) {
+            !occluderBlocks(mesh, at.point_w, to_sky)) {
           const double brdf_pdf = gltf_brdf::pdf(at.normal, view, to_sky, material);
           radiance += throughput * f_sky * meshSkyRadiance(to_sky, fs, clipped) / (sky_pdf + brdf_pdf);
         }
@@ -1372,7 +1495,7 @@ struct World::Impl {
         }
         if (next.l.z < 0.0) {
           const glm::dvec3 ground = at.point_w + (-at.point_w.z / next.l.z) * next.l;
-          radiance += throughput * weight * meshFloorRadiance(ground, fs, clipped);
+          radiance += throughput * weight * meshFloorRadiance(ground, fs, clipped, uniform(), uniform(), uniform());
         } else {
           const double sky_density = sky.pdf(next.l);
           radiance += throughput * f * meshSkyRadiance(next.l, fs, clipped) / (next.pdf + sky_density);
@@ -1386,7 +1509,8 @@ struct World::Impl {
 
   // render()'s sensor model for a prepared frame state.
   // `exposure_ev`: stops from the scene's exposure (a bracket frame).
-  void renderFrame(const FrameState& fs, std::uint64_t frame_index, ImageRGB8& out, double exposure_ev = 0.0) const {
+  void renderFrame(const FrameState& fs, std::uint64_t frame_index, ImageRGB8& out, double exposure_ev = 0.0,
+                   const World::PixelWindow* window = nullptr) const {
     out.resize(scene.camera.width_px, scene.camera.height_px);
     const double scale = exposure * std::exp2(exposure_ev);
     const float sigma = static_cast<float>(scene.noise_sigma_code);
@@ -1395,7 +1519,7 @@ struct World::Impl {
     // Each exposure of a bracket has noise of its own, as a sensor's frames do.
     if (exposure_ev != 0.0) frame_salt = splitMix64(frame_salt + static_cast<std::uint64_t>(std::llround(exposure_ev * 1024.0)));
     std::uint8_t* pixels = out.pixels.data();
-    traceFrame(fs, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
+    traceFrame(fs, window, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
       // Noise is a function of (seed, frame, pixel) only, so threads and
       // render order cannot change it.
       std::uint64_t bits = splitMix64(frame_salt + pixel);
@@ -1446,9 +1570,16 @@ struct World::Impl {
   // curved outline that cuts a sliver off one side of a pixel without
   // reaching a corner is missed: a 30 px ball's arc strays at most
   // 1 / (8 * 30) px into such a pixel.
+  //
+  // With a window, only its pixels are traced and emitted (and the corners
+  // around them): the rest of the frame costs nothing.
   template <typename Emit>
-  void traceFrame(const FrameState& fs, Emit emit) const {
+  void traceFrame(const FrameState& fs, const World::PixelWindow* window, Emit emit) const {
     const int width = scene.camera.width_px, height = scene.camera.height_px;
+    const int x_begin = window ? std::clamp(window->x_begin, 0, width) : 0;
+    const int x_end = window ? std::clamp(window->x_end, x_begin, width) : width;
+    const int y_begin = window ? std::clamp(window->y_begin, 0, height) : 0;
+    const int y_end = window ? std::clamp(window->y_end, y_begin, height) : height;
     const int threads = std::max(1, scene.render_threads);
     const int edge_n = scene.edge_samples_per_axis;
     const bool corner_rule = samples_per_pixel == 0;  // validate(): only with edge_n > 0
@@ -1462,9 +1593,9 @@ struct World::Impl {
         corner_radiance.resize(corners);
         corner_object.resize(corners);
       }
-      parallelRows(height + 1, threads, [&](int r0, int r1, int) {
-        for (int y = r0; y < r1; ++y)
-          for (int x = 0; x <= width; ++x) {
+      parallelRows(y_end + 1 - y_begin, threads, [&](int r0, int r1, int) {
+        for (int y = y_begin + r0; y < y_begin + r1; ++y)
+          for (int x = x_begin; x <= x_end; ++x) {
             const size_t i = static_cast<size_t>(y) * (width + 1) + x;
             const float* r = &corner_rays_cam[i * 3];
             const glm::dvec3 dir = fs.world_from_cam * glm::dvec3(r[0], r[1], r[2]);
@@ -1475,10 +1606,10 @@ struct World::Impl {
           }
       });
     }
-    parallelRows(height, threads, [&](int r0, int r1, int) {
+    parallelRows(y_end - y_begin, threads, [&](int r0, int r1, int) {
       std::vector<SceneObject> objects;
-      for (int y = r0; y < r1; ++y)
-        for (int x = 0; x < width; ++x) {
+      for (int y = y_begin + r0; y < y_begin + r1; ++y)
+        for (int x = x_begin; x < x_end; ++x) {
           const size_t pixel = static_cast<size_t>(y) * width + x;
           glm::dvec3 sum(0.0);
           const size_t c = static_cast<size_t>(y) * (width + 1) + x;
@@ -1684,12 +1815,13 @@ std::vector<World::GroundShadowTruth> World::groundShadow(const std::vector<glm:
 }
 
 void World::renderWithOccluders(std::uint64_t frame_index, const std::vector<VirtualOccluder>& occluders,
-                                ImageRGB8& out, FrameTruth& truth) const {
+                                ImageRGB8& out, FrameTruth& truth, const PixelWindow* window) const {
   const Impl& w = *impl_;
   FrameState fs = w.frameState(frame_index);
-  const std::unique_ptr<OccluderFrame> occluder_frame = w.occluderFrame(fs.lighting, occluders);
+  const std::unique_ptr<OccluderFrame> occluder_frame = w.occluderFrame(fs, occluders);
   fs.occluders = occluder_frame.get();
-  w.renderFrame(fs, frame_index, out);
+  fs.occluders_only = window && window->occluders_only;
+  w.renderFrame(fs, frame_index, out, 0.0, window);
   truth = this->truth(frame_index);
 
   // The truth's visibility flags, now with the occluders in the way.
@@ -1732,7 +1864,7 @@ std::vector<float> World::coverage(std::uint64_t frame_index, SceneObject object
   const Impl& w = *impl_;
   const FrameState fs = w.frameState(frame_index);
   std::vector<float> fraction(static_cast<size_t>(w.scene.camera.width_px) * w.scene.camera.height_px, 0.0f);
-  w.traceFrame(fs, [&](size_t pixel, const glm::dvec3&, const std::vector<SceneObject>& objects) {
+  w.traceFrame(fs, nullptr, [&](size_t pixel, const glm::dvec3&, const std::vector<SceneObject>& objects) {
     int hits = 0;
     for (SceneObject o : objects) hits += o == object ? 1 : 0;
     fraction[pixel] = static_cast<float>(hits) / static_cast<float>(objects.size());

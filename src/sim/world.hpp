@@ -132,8 +132,20 @@ class World {
   // its own triangles (self-occlusion, and interreflection up to its
   // max_bounces) and the shadowed floor below, path_samples paths per
   // shaded sample; see shadeMesh in world.cpp for what it leaves out.
+  //
+  // `window`: only the pixels in it are rendered, the rest left black (0);
+  // each rendered pixel is the same as in the whole frame. With
+  // occluders_only, what the occluders do not cover is black too (an edge
+  // pixel holds only the occluder's share of its light): a model's truth
+  // without the exact ground shadow of the floor around it, whose grid of
+  // exact nodes (thousands of rays each near a mesh) is most of a truth
+  // frame's cost.
+  struct PixelWindow {
+    int x_begin = 0, y_begin = 0, x_end = 0, y_end = 0;  // [begin, end) in pixels
+    bool occluders_only = false;
+  };
   void renderWithOccluders(std::uint64_t frame_index, const std::vector<VirtualOccluder>& occluders,
-                           ImageRGB8& out, FrameTruth& truth) const;
+                           ImageRGB8& out, FrameTruth& truth, const PixelWindow* window = nullptr) const;
   // Below this (every channel) renderWithOccluders leaves the ground unshadowed:
   // it changes an 8-bit sRGB code by at most 0.44 * 255 * deficit = 0.02.
   static constexpr double kIgnoredShadowDeficit = 2e-4;

@@ -39,9 +39,9 @@ const std::vector<std::uint8_t>& StatusOverlay::render(const std::string& text, 
   return rgba_;
 }
 
-ComposeStage::ComposeStage(const SceneObject& object, const CameraIntrinsics& camera, RunReport& report,
-                           bool finish_gpu)
-    : object_(object), camera_(camera), report_(report), finish_gpu_(finish_gpu) {
+ComposeStage::ComposeStage(const SceneObject& object, const CameraIntrinsics& camera, const RigGeometry& rig,
+                           RunReport& report, bool finish_gpu)
+    : object_(object), camera_(camera), rig_(rig), report_(report), finish_gpu_(finish_gpu) {
   if (object_.shape.shape == ibl::ShadowCaster::Shape::kBox) mesh_ = passes::boxMesh(object_.shape);
 }
 
@@ -91,6 +91,10 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
     if (object_.isModel() && shadows.enabled())
       model_renderer_.setSelfShadow(&shadows.pass().selfShadowLights(), shadows.pass().shadowMapSizePx(),
                                     shadows.pass().packedDepth());
+    // A model reflects the floor beside it, with its own shadow there.
+    if (object_.isModel())
+      model_renderer_.setNearFloor(true, rig_.probe_center_w, rig_.probe_radius_m,
+                                   shadows.enabled() ? &shadows.pass() : nullptr);
     const bool drawn =
         object_.isModel() ? model_renderer_.draw(camera_, track.pose, lighting, maps.maps(), error)
         : mesh_.empty()

@@ -41,7 +41,11 @@ class ComposeStage {
  public:
   static constexpr const char* kStageName = "render";
 
-  ComposeStage(const SceneObject& object, const CameraIntrinsics& camera, RunReport& report, bool finish_gpu);
+  // rig: where the ball stands, which the maps see the world from: a
+  // model's reflection of the floor beside it is read from there
+  // (ibl/near_floor.hpp).
+  ComposeStage(const SceneObject& object, const CameraIntrinsics& camera, const RigGeometry& rig, RunReport& report,
+               bool finish_gpu);
   // `storage`: the maps' (the object's shaders decode them).
   Status init(const gles::Capabilities& capabilities, passes::CubeStorage storage);
 
@@ -55,6 +59,7 @@ class ComposeStage {
  private:
   SceneObject object_;
   CameraIntrinsics camera_;
+  RigGeometry rig_;
   RunReport& report_;
   bool finish_gpu_;
   passes::ObjectCompositor compositor_;

@@ -34,7 +34,7 @@ MapsStage::MapsStage(const PipelineSettings& settings, double probe_reflectance,
 
 Status MapsStage::init(const gles::Capabilities& capabilities) {
   std::string error;
-  if (!maps_.init(capabilities, environmentMapSettings(settings_), error))
+  if (!maps_.init(capabilities, environmentMapSettings(settings_, object_reads_glossy_), error))
     return Status::runtimeFailure("GPU set-up failed: " + error);
   return Status::ok();
 }

@@ -105,6 +105,11 @@ struct ObjectConfig {
   std::string model_path;
   double yaw_deg = 0.0;
   double scale = 1.0;
+  // A model's shadow on itself from the dome's lights (the ground shadow's
+  // maps of its near side, read by its shader). Off saves the near-side
+  // maps and most of the model's fragment work (8 map reads a pixel), and
+  // shows a concave model's hollows as bright as its open faces.
+  bool self_shadow = true;
 };
 
 // The board's camera (--source libcamera); its size is camera.yaml's.

@@ -14,8 +14,9 @@ ShadowsStage::ShadowsStage(const PipelineSettings& settings, const ibl::ShadowCa
 Status ShadowsStage::init(const gles::Capabilities& capabilities) {
   std::string error;
   passes::GroundShadowSettings shadow_settings = groundShadowSettings(settings_);
-  // A model shadows itself too (ComposeStage hands it the near-side maps).
-  shadow_settings.self_shadow_maps = caster_.shape == ibl::ShadowCaster::Shape::kMesh;
+  // A model shadows itself too (ComposeStage hands it the near-side maps),
+  // unless probelight.yaml's object.self_shadow says not to.
+  shadow_settings.self_shadow_maps = caster_.shape == ibl::ShadowCaster::Shape::kMesh && settings_.object.self_shadow;
   if (enabled() && !pass_.init(capabilities, shadow_settings, error))
     return Status::runtimeFailure("GPU set-up failed: " + error);
   return Status::ok();

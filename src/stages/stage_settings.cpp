@@ -21,9 +21,9 @@ tracking::TagDetectorSettings tagDetectorSettings(const PipelineSettings& settin
   return detector;
 }
 
-passes::EnvironmentMapSettings environmentMapSettings(const PipelineSettings& settings) {
+passes::EnvironmentMapSettings environmentMapSettings(const PipelineSettings& settings, bool object_reads_glossy) {
   passes::EnvironmentMapSettings stages = settings.maps.stages;
-  if (!ibl::needsGlossy(objectMaterial(settings))) stages.glossy_levels = 0;
+  if (!object_reads_glossy) stages.glossy_levels = 0;
   // A glossy level is never finer than the reflection map it filters; at a
   // smaller face_size it takes the map's own size (which divides it).
   for (int& size : stages.glossy_face_size) size = std::min(size, stages.reflection_face_size);
@@ -31,7 +31,7 @@ passes::EnvironmentMapSettings environmentMapSettings(const PipelineSettings& se
 }
 
 std::vector<double> glossyExponents(const PipelineSettings& settings) {
-  const passes::EnvironmentMapSettings maps = environmentMapSettings(settings);
+  const passes::EnvironmentMapSettings& maps = settings.maps.stages;
   std::vector<double> exponents;
   for (int level = 0; level < std::clamp(maps.glossy_levels, 0, 2); ++level)
     exponents.push_back(maps.glossy_exponent[static_cast<size_t>(level)]);

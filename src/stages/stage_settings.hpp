@@ -23,10 +23,13 @@ tracking::TagDetectorSettings tagDetectorSettings(const PipelineSettings& settin
 
 // The `environment_maps` section as the GPU stages take it (force_8bit is not
 // here: it changes the capabilities the stages are given, not their settings).
-// Glossy maps are allocated only when the object's material reads them.
-passes::EnvironmentMapSettings environmentMapSettings(const PipelineSettings& settings);
+// Glossy maps are allocated only when the object reads them
+// (SceneObject::readsGlossy with glossyExponents: the sphere's material, or
+// a model's materials, whatever the sphere's settings say).
+passes::EnvironmentMapSettings environmentMapSettings(const PipelineSettings& settings, bool object_reads_glossy);
 
-// The exponents of the glossy levels the maps are configured with (sharpest first).
+// The exponents of the glossy levels the maps are configured with (sharpest
+// first), whether or not the object reads them.
 std::vector<double> glossyExponents(const PipelineSettings& settings);
 
 // The `object` section as the shading takes it.

@@ -33,6 +33,7 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_EQ(from_file.object.model_path, defaults.object.model_path);
   EXPECT_DOUBLE_EQ(from_file.object.yaw_deg, defaults.object.yaw_deg);
   EXPECT_DOUBLE_EQ(from_file.object.scale, defaults.object.scale);
+  EXPECT_EQ(from_file.object.self_shadow, defaults.object.self_shadow);
   EXPECT_EQ(from_file.maps.force_8bit, defaults.maps.force_8bit);
   EXPECT_DOUBLE_EQ(from_file.tracking.quad_decimate, defaults.tracking.quad_decimate);
   EXPECT_EQ(from_file.tracking.threads, defaults.tracking.threads);

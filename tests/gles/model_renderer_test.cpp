@@ -14,6 +14,7 @@
 #include "ibl/camera_projection.hpp"
 #include "ibl/color_transfer.hpp"
 #include "ibl/metallic_roughness.hpp"
+#include "ibl/near_floor.hpp"
 #include "model/gltf_loader.hpp"
 #include "model/model_placement.hpp"
 #include "passes/camera_frame_texture.hpp"
@@ -242,6 +243,133 @@ TEST_P(ModelShadingTest, MatchesCpuShadeMetallicRoughness) {
 
 INSTANTIATE_TEST_SUITE_P(Storage, ModelShadingTest, ::testing::Values(false, true),
                          [](const auto& info) { return info.param ? "EightBitPath" : "BestPath"; });
+
+// The floor beside the model in its reflections (ibl/near_floor.hpp): the
+// quad's lower half reflects the ground in front of it, where a sphere's
+// shadow lies. The GPU against the CPU reference with the same lookup and
+// the ground texture's fractions (read back, filtered bilinearly as GL's
+// LINEAR does), within the shading test's 1.5 levels; and the reference
+// without the near floor is many levels off, so the check can tell.
+//
+// The camera has no lens distortion here: the GPU distorts a mesh's
+// vertices and rasterises straight between them, so inside this quad's two
+// large triangles a distorted view puts each pixel's surface point up to a
+// pixel from the exact ray's, which the reflection carries to the ground
+// several times over (2 mm at the quad's foot), across the shadow's edge.
+TEST_F(GpuTest, NearFloorReflectionsMatchTheCpuReference) {
+  const gles::Capabilities caps = test::sharedCapabilities();
+  ModelStage stage;
+  stage.camera.distortion = {};
+  ASSERT_NO_FATAL_FAILURE(initStage(stage, caps));
+  std::vector<const ibl::CubeMapRGB*> glossy;
+  for (const auto& map : stage.glossy_maps) glossy.push_back(&map);
+  std::vector<double> exponents(stage.maps.settings().glossy_exponent.begin(),
+                                stage.maps.settings().glossy_exponent.begin() + stage.maps.glossyLevels());
+  const std::vector<double> rung_alphas = ibl::specularRungAlphas(exponents);
+  const ibl::EnvironmentBrdfTable table;
+  std::string error;
+
+  ibl::ShadowCaster caster;
+  caster.position_w = {0.0, -0.07};
+  caster.radius_m = 0.03;
+  ibl::ShadowLight light;
+  light.direction_w = glm::normalize(glm::dvec3(0.0, -0.3, 1.0));
+  light.share_rgb = glm::dvec3(0.7);
+  light.rgb = glm::dvec3(1.0);
+  light.cone_radius_rad = 0.05;
+  passes::GroundShadow shadow;
+  ASSERT_TRUE(shadow.init(caps, {}, error)) << error;
+  ASSERT_TRUE(shadow.update({light}, caster, error)) << error;
+  ASSERT_TRUE(shadow.hasShadow());
+  const std::optional<std::vector<glm::vec3>> fractions = shadow.readFraction(error);
+  ASSERT_TRUE(fractions) << error;
+  const int n = shadow.groundTextureSizePx();
+  const ibl::GroundRegion region = shadow.region();
+  auto fractionAt = [&](const glm::vec2& ground_w) {
+    const glm::dvec2 uv = (glm::dvec2(ground_w) - region.centre_w) / (2.0 * region.half_size_m) + 0.5;
+    if (uv.x < 0.0 || uv.x > 1.0 || uv.y < 0.0 || uv.y > 1.0) return glm::vec3(1.0f);
+    const glm::dvec2 texel = uv * static_cast<double>(n) - 0.5;
+    const int i0 = static_cast<int>(std::floor(texel.x)), j0 = static_cast<int>(std::floor(texel.y));
+    const auto fx = static_cast<float>(texel.x - i0), fy = static_cast<float>(texel.y - j0);
+    auto at = [&](int i, int j) {
+      return (*fractions)[static_cast<size_t>(std::clamp(j, 0, n - 1)) * n + static_cast<size_t>(std::clamp(i, 0, n - 1))];
+    };
+    return glm::mix(glm::mix(at(i0, j0), at(i0 + 1, j0), fx), glm::mix(at(i0, j0 + 1), at(i0 + 1, j0 + 1), fx), fy);
+  };
+
+  ibl::NearFloorBall ball;
+  ball.centre_w = {0.12f, -0.10f, 0.09f};
+  ball.radius_m = 0.03f;
+  ball.to_eye_w = glm::normalize(glm::vec3(stage.pose.cameraCenterWorld()) - ball.centre_w);
+  for (const ShadingCase& c : {ShadingCase{"steel, roughness 0.05", {0.56f, 0.57f, 0.58f, 1}, 1.0f, 0.05f, false},
+                               ShadingCase{"gold, roughness 0.3", {1.0f, 0.77f, 0.34f, 1}, 1.0f, 0.3f, false}}) {
+    model::Material material;
+    material.base_color_factor = c.base_color_factor;
+    material.metallic_factor = c.metallic;
+    material.roughness_factor = c.roughness;
+    const model::MeshModel quad = texturedQuad(material, false);
+    passes::ModelRenderer renderer;
+    ASSERT_TRUE(renderer.init(caps, stage.maps.storage(), quad, glm::dmat4(1.0), {}, error)) << error;
+    renderer.setNearFloor(true, glm::dvec3(ball.centre_w), ball.radius_m, &shadow);
+    ImageRGB8 result;
+    ASSERT_TRUE(renderModel(stage, renderer, result, error)) << error;
+    const glm::dvec3 eye = stage.pose.cameraCenterWorld();
+    int compared = 0, shadowed = 0;
+    double max_error = 0.0, max_error_without = 0.0;
+    for (int y = 0; y < result.height; ++y)
+      for (int x = 0; x < result.width; ++x) {
+        const auto uv = quadUvAt(stage, x, y);
+        if (!uv || uv->x < 0.01 || uv->x > 0.99 || uv->y < 0.01 || uv->y > 0.99) continue;
+        const glm::dvec3 ray = glm::normalize(glm::transpose(stage.pose.R_cam_from_world) *
+                                              ibl::pixelToCameraRay(stage.camera, {x, y}));
+        const glm::vec3 to_eye(-ray);
+        const glm::vec3 r = glm::reflect(-to_eye, glm::vec3(0, -1, 0));
+        if (!(r.z < -0.05f)) continue;  // the floor, clear of the horizon's seam of rungs
+        ibl::MetallicRoughnessSurface surface;
+        surface.base_color = glm::vec3(c.base_color_factor);
+        surface.metallic = c.metallic;
+        surface.roughness = c.roughness;
+        ibl::NearFloorShading near_floor;
+        near_floor.point_w = glm::vec3(eye + (-eye.y / ray.y) * ray);
+        near_floor.ball = ball;
+        near_floor.fraction = fractionAt;
+        const glm::vec3 linear = ibl::shadeMetallicRoughness({0, -1, 0}, to_eye, surface, *stage.diffuse,
+                                                             *stage.reflection, glossy, rung_alphas, table, {},
+                                                             &near_floor);
+        const glm::vec3 without = ibl::shadeMetallicRoughness({0, -1, 0}, to_eye, surface, *stage.diffuse,
+                                                              *stage.reflection, glossy, rung_alphas, table, {});
+        const ibl::NearFloorLookup lookup = ibl::nearFloorLookup(near_floor.point_w, r, ball);
+        // Off the shadow's edge by a texel: there the fraction steps by
+        // most of its range within a texel, and a lookup a hair away (the
+        // GPU's 8-bit filter weights) reads another value.
+        const glm::vec2 ground(lookup.ground_point_w);
+        const float texel_m = static_cast<float>(2.0 * region.half_size_m / n);
+        float lowest = 1.0f, highest = 0.0f;
+        for (const glm::vec2& step : {glm::vec2(0.0f), glm::vec2(texel_m, 0.0f), glm::vec2(-texel_m, 0.0f),
+                                      glm::vec2(0.0f, texel_m), glm::vec2(0.0f, -texel_m)}) {
+          lowest = std::min(lowest, fractionAt(ground + 1.5f * step).r);
+          highest = std::max(highest, fractionAt(ground + 1.5f * step).r);
+        }
+        if (highest - lowest > 0.02f) continue;
+        shadowed += fractionAt(ground).r < 0.9f ? 1 : 0;
+        for (int k = 0; k < 3; ++k) {
+          const double expected = 255.0 * ibl::linearToSrgb(std::clamp(linear[k], 0.0f, 1.0f));
+          if (std::abs(result.row(y)[3 * x + k] - expected) > max_error) std::printf("DBG %d %d k%d gpu %d cpu %.1f frac %.3f ground %.4f %.4f r %.3f %.3f %.3f\n", x, y, k, result.row(y)[3*x+k], expected, fractionAt(ground).r, ground.x, ground.y, r.x, r.y, r.z);
+          max_error = std::max(max_error, std::abs(result.row(y)[3 * x + k] - expected));
+          max_error_without = std::max(
+              max_error_without, std::abs(255.0 * ibl::linearToSrgb(std::clamp(without[k], 0.0f, 1.0f)) - expected));
+        }
+        ++compared;
+      }
+    std::printf("[ measure  ] near floor (%s): %d px off the shadow's edge (%d reflect the shadow), max |GPU-CPU| "
+                "%.2f levels (without the near floor: %.1f)\n",
+                c.name, compared, shadowed, max_error, max_error_without);
+    EXPECT_GT(compared, 1000) << c.name;
+    EXPECT_GT(shadowed, 100) << c.name;
+    EXPECT_LE(max_error, 1.5) << c.name;
+    EXPECT_GT(max_error_without, 10.0) << c.name;
+  }
+}
 
 // MASK: texels under the cutoff are not drawn at all (the background stays
 // byte for byte), those above are opaque. BLEND: alpha 128 mixes the lit

@@ -46,6 +46,29 @@ TEST(SceneObject, AModelReadsGlossyMapsOnlyForRoughnessBetweenMirrorAndMatte) {
   EXPECT_TRUE(modelReadsGlossy(*textured, exponents));
 }
 
+// The maps the stages make follow the object shown: with probelight.yaml's
+// defaults (the sphere's material a mirror, which reads no glossy map) a
+// rough model still gets its glossy levels, and a matte one none. (They
+// once followed the sphere's settings alone, so a model of roughness 0.3
+// was drawn from the mirror map, as sharp as a roughness of 0.05.)
+TEST(SceneObject, GlossyMapsAreMadeForTheObjectShownNotTheSpheresSettings) {
+  const PipelineSettings defaults;
+  ASSERT_EQ(glossyExponents(defaults).size(), 2u);
+  for (const auto& [roughness, levels] : {std::pair{0.3f, 2}, {1.0f, 0}, {0.0f, 0}}) {
+    SceneObject object;
+    object.model = triangleModel(roughness);
+    EXPECT_EQ(environmentMapSettings(defaults, object.readsGlossy(glossyExponents(defaults))).glossy_levels, levels)
+        << roughness;
+  }
+  // The built-in sphere: glossy levels only for a glossiness between mirror and matte.
+  SceneObject sphere;
+  sphere.material = objectMaterial(defaults);
+  EXPECT_EQ(environmentMapSettings(defaults, sphere.readsGlossy(glossyExponents(defaults))).glossy_levels, 0);
+  sphere.material.k_reflect = 0.5f;
+  sphere.material.glossiness = 0.5f;
+  EXPECT_EQ(environmentMapSettings(defaults, sphere.readsGlossy(glossyExponents(defaults))).glossy_levels, 2);
+}
+
 TEST(SceneObject, AModelStandsOnTheGroundAndCastsItsOwnTriangles) {
   const SceneObject object = modelSceneObject(triangleModel(0.5f), {{0.02, -0.03}, 0.5 * M_PI, 2.0});
   ASSERT_TRUE(object.isModel());
