@@ -15,9 +15,13 @@
 // Precision: everything here is a colour, a unit vector or a roughness;
 // 16-bit mediump keeps them to 2^-11, under half an 8-bit step. Nothing
 // divides by a roughness: the ladder position divides only by differences
-// of the rung alphas, constants at least 0.06 apart.
+// of the rung alphas, constants at least 0.04 apart.
 #include "color_transfer.glsl"
 #include "cube_storage.glsl"
+#ifdef NEAR_FLOOR_CAMERA
+#include "camera_transfer.glsl"
+#include "camera_projection.glsl"
+#endif
 #include "depth_packing.glsl"
 
 #ifndef GLOSSY_LEVELS
@@ -125,15 +129,45 @@ uniform vec3 u_ball_to_eye_w;
 uniform sampler2D u_ground_fraction;
 uniform vec3 u_ground_region;
 #endif
+#ifdef NEAR_FLOOR_CAMERA
+// The frame the camera took, and where a ground point falls in it
+// (ibl::cameraFloorWeight hands over to the maps near its edge). Names of
+// their own: a uniform the vertex shader also declares would have to agree
+// in precision.
+uniform sampler2D u_floor_camera;
+uniform mat3 u_floor_rotation_cam_from_world;
+uniform vec3 u_floor_translation_cam_from_world;
+uniform vec4 u_floor_distortion;
+uniform float u_floor_distortion_k3;
+uniform vec2 u_floor_focal_px;
+uniform vec2 u_floor_principal_px;
+uniform vec2 u_floor_image_size_px;
 
-vec3 nearFloorDirection(vec3 position, vec3 direction, out vec3 fraction) {
+vec4 cameraFloor(vec2 ground) {
+  vec3 p = u_floor_rotation_cam_from_world * vec3(ground, 0.0) + u_floor_translation_cam_from_world;
+  if (p.z <= 1e-3) return vec4(0.0);
+  vec2 pixel = u_floor_focal_px * distortNormalized(p.xy / p.z, u_floor_distortion, u_floor_distortion_k3) +
+               u_floor_principal_px;
+  vec2 inside = min(pixel + 0.5, u_floor_image_size_px - 0.5 - pixel);
+  float weight = clamp(min(inside.x, inside.y) / CAMERA_FLOOR_MARGIN_PX, 0.0, 1.0);
+  // The frame is upright in its texture, t = 0 at the top row.
+  vec3 seen = decodeCamera(texture2D(u_floor_camera, (pixel + 0.5) / u_floor_image_size_px).rgb);
+  return vec4(seen, weight);
+}
+#endif
+
+vec3 nearFloorDirection(vec3 position, vec3 direction, out vec3 fraction, out vec4 camera_floor) {
   fraction = vec3(1.0);
+  camera_floor = vec4(0.0);
   if (direction.z >= 0.0) return direction;
   float distance_m = min(max(position.z, 0.0) / -direction.z, NEAR_FLOOR_MAX_DISTANCE_M);
   vec2 ground = position.xy + distance_m * direction.xy;
 #ifdef NEAR_FLOOR_SHADOW
   vec2 uv = (ground - u_ground_region.xy) * u_ground_region.z + 0.5;
   if (uv.x >= 0.0 && uv.x <= 1.0 && uv.y >= 0.0 && uv.y <= 1.0) fraction = texture2D(u_ground_fraction, uv).rgb;
+#endif
+#ifdef NEAR_FLOOR_CAMERA
+  camera_floor = cameraFloor(ground);
 #endif
   vec3 from_ball = vec3(ground, 0.0) - u_ball_centre_w;
   float length_m = length(from_ball);
@@ -286,14 +320,16 @@ void main() {
 
   vec3 mirror = reflect(-to_eye, n);
   vec3 floor_fraction = vec3(1.0);
+  vec4 camera_floor = vec4(0.0);
 #ifdef NEAR_FLOOR
-  mirror = nearFloorDirection(v_position_w, mirror, floor_fraction);
+  mirror = nearFloorDirection(v_position_w, mirror, floor_fraction, camera_floor);
 #endif
   float position = clamp(ladderPosition(roughness * roughness), float(RUNG_FIRST), float(RUNG_LAST));
   vec3 specular = vec3(0.0);
 #if RUNG_FIRST == 0
   specular += rungWeight(0.0, position) *
-              sampleCubeBilinear(u_reflection_map, mirror, u_reflection_face_size, u_reflection_scale).rgb;
+              mix(sampleCubeBilinear(u_reflection_map, mirror, u_reflection_face_size, u_reflection_scale).rgb,
+                  camera_floor.rgb, camera_floor.a);
 #endif
 #ifdef READS_GLOSSY0
   specular += rungWeight(1.0, position) *

@@ -393,7 +393,7 @@ class Analyzer {
   Status renderComposite() {
     const SceneObject& object = object_;
     ShadowsStage shadows(settings_, object.shape, report_);
-    ComposeStage compose(object, camera_, rig_, report_, settings_.gpu_finish);
+    ComposeStage compose(object, camera_, rig_, settings_.maps.stages.camera_transfer, report_, settings_.gpu_finish);
     gles::RenderTarget target;
     std::string error;
     // The 8-bit maps as the kiosk keeps them, plus the light they clipped.

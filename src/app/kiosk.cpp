@@ -387,7 +387,8 @@ class Kiosk {
     lights_ = std::make_unique<LightsStage>(settings, inputs_.rig, inputs_.camera, *source_, report_, log_,
                                             options_.quiet);
     shadows_ = std::make_unique<ShadowsStage>(settings, object.shape, report_);
-    compose_ = std::make_unique<ComposeStage>(object, inputs_.camera, inputs_.rig, report_, settings.gpu_finish);
+    compose_ = std::make_unique<ComposeStage>(object, inputs_.camera, inputs_.rig, settings.maps.stages.camera_transfer,
+                                              report_, settings.gpu_finish);
     if (world_) truth_ = std::make_unique<TruthMonitor>(world_, report_);
     PROBELIGHT_TRY(upload_->init(capabilities_));
     PROBELIGHT_TRY(maps_->init(capabilities_));

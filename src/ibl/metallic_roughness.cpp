@@ -1,16 +1,119 @@
 #include "ibl/metallic_roughness.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
+#include <mutex>
 
 namespace probelight::ibl {
 
-double ggxAlphaOfPhongExponent(double exponent) { return 1.0 / std::sqrt(2.0 * std::max(exponent, 0.0) + 1.0); }
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// The fit's angles from the axis: 1 to 89 degrees.
+constexpr int kFitAngles = 89;
+// Midpoint steps over the light's 90 degrees: the lobe of alpha 0.046 is
+// 3 degrees wide, 40 steps.
+constexpr int kLobeSteps = 1200;
+
+double ggxD(double cos_h, double alpha) {
+  const double a2 = alpha * alpha;
+  const double d = cos_h * cos_h * (a2 - 1.0) + 1.0;
+  return a2 / (kPi * d * d);
+}
+
+// GGX's lobe at n = v over the light's angle theta_l from the axis: the
+// split-sum's sample density D(h) / 4 (h halfway, at theta_l / 2) times its
+// weight n.l, per unit theta_l (sin theta_l for the solid angle).
+double ggxLobeDensity(double theta_l, double alpha) {
+  return ggxD(std::cos(0.5 * theta_l), alpha) / 4.0 * std::cos(theta_l) * std::sin(theta_l);
+}
+
+// The lobe's cumulative energy at 1..kFitAngles degrees, in one pass.
+std::array<double, kFitAngles> ggxLobeCumulative(double alpha) {
+  std::array<double, kFitAngles> cumulative{};
+  const double step = 0.5 * kPi / kLobeSteps;
+  double sum = 0.0;
+  int next = 0;
+  for (int i = 0; i < kLobeSteps; ++i) {
+    const double theta = (i + 0.5) * step;
+    while (next < kFitAngles && (next + 1) * kPi / 180.0 <= i * step) cumulative[next++] = sum;
+    sum += ggxLobeDensity(theta, alpha) * step;
+  }
+  while (next < kFitAngles) cumulative[next++] = sum;
+  for (double& c : cumulative) c /= sum;
+  return cumulative;
+}
+
+double fitError(double alpha, double exponent) {
+  const std::array<double, kFitAngles> ggx = ggxLobeCumulative(alpha);
+  double error = 0.0;
+  for (int k = 0; k < kFitAngles; ++k) {
+    const double d = ggx[static_cast<size_t>(k)] - phongLobeEnergyWithin(exponent, (k + 1) * kPi / 180.0);
+    error += d * d;
+  }
+  return error;
+}
+
+double fitGgxAlpha(double exponent) {
+  // Golden-section search over log alpha in [1e-3, 1] (the error has one
+  // minimum there; for the cosine lobe it is at alpha = 1 itself).
+  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+  double low = std::log(1e-3), high = 0.0;
+  double a = high - golden * (high - low), b = low + golden * (high - low);
+  double fa = fitError(std::exp(a), exponent), fb = fitError(std::exp(b), exponent);
+  for (int iteration = 0; iteration < 60; ++iteration) {
+    if (fa < fb) {
+      high = b;
+      b = a;
+      fb = fa;
+      a = high - golden * (high - low);
+      fa = fitError(std::exp(a), exponent);
+    } else {
+      low = a;
+      a = b;
+      fa = fb;
+      b = low + golden * (high - low);
+      fb = fitError(std::exp(b), exponent);
+    }
+  }
+  return std::exp(0.5 * (low + high));
+}
+
+}  // namespace
+
+double ggxLobeEnergyWithin(double alpha, double theta_rad) {
+  const double step = 0.5 * kPi / kLobeSteps;
+  double within = 0.0, total = 0.0;
+  for (int i = 0; i < kLobeSteps; ++i) {
+    const double theta = (i + 0.5) * step;
+    const double e = ggxLobeDensity(theta, alpha) * step;
+    total += e;
+    if (theta < theta_rad) within += e;
+  }
+  return within / total;
+}
+
+double phongLobeEnergyWithin(double exponent, double theta_rad) {
+  // The integral of cos^n sin over [0, theta], over the hemisphere's.
+  return 1.0 - std::pow(std::cos(std::clamp(theta_rad, 0.0, 0.5 * kPi)), exponent + 1.0);
+}
+
+double ggxAlphaOfPhongExponent(double exponent) {
+  static std::mutex mutex;
+  static std::map<double, double> fitted;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto found = fitted.find(exponent);
+  if (found == fitted.end()) found = fitted.emplace(exponent, fitGgxAlpha(std::max(exponent, 0.0))).first;
+  return found->second;
+}
 
 std::vector<double> specularRungAlphas(const std::vector<double>& glossy_exponents) {
   std::vector<double> alphas{0.0};
   for (double exponent : glossy_exponents) alphas.push_back(ggxAlphaOfPhongExponent(exponent));
-  alphas.push_back(ggxAlphaOfPhongExponent(1.0));
+  // The diffuse map's cosine lobe is GGX's at alpha 1 exactly (D = 1 / pi).
+  alphas.push_back(1.0);
   return alphas;
 }
 
@@ -55,10 +158,12 @@ glm::vec3 shadeMetallicRoughness(const glm::vec3& normal_w, const glm::vec3& to_
     diffuse += lighting.clipped_diffuse_rgb[k] * std::max(0.0f, glm::dot(normal_w, lighting.clipped_direction_w[k]));
   glm::vec3 mirror_w = glm::reflect(-to_eye_w, normal_w);
   glm::vec3 floor_fraction(1.0f);
+  glm::vec4 camera_floor(0.0f);
   if (near_floor != nullptr) {
     const NearFloorLookup lookup = nearFloorLookup(near_floor->point_w, mirror_w, near_floor->ball);
     mirror_w = lookup.map_direction_w;
     if (lookup.meets_ground && near_floor->fraction) floor_fraction = near_floor->fraction(glm::vec2(lookup.ground_point_w));
+    if (lookup.meets_ground && near_floor->camera_floor) camera_floor = near_floor->camera_floor(lookup.ground_point_w);
   }
   const int last = static_cast<int>(rung_alphas.size()) - 1;
   const auto rung = [&](int k) -> glm::vec3 {
@@ -66,8 +171,10 @@ glm::vec3 shadeMetallicRoughness(const glm::vec3& normal_w, const glm::vec3& to_
     const CubeMapRGB* map = k == 0 ? &reflection_map
                                    : (k - 1 < static_cast<int>(glossy_maps.size()) ? glossy_maps[static_cast<size_t>(k - 1)]
                                                                                   : nullptr);
-    return map != nullptr && map->face_size > 0 ? floor_fraction * map->sampleBilinear(glm::dvec3(mirror_w))
-                                                : glm::vec3(0);
+    if (map == nullptr || map->face_size <= 0) return glm::vec3(0);
+    glm::vec3 seen = map->sampleBilinear(glm::dvec3(mirror_w));
+    if (k == 0) seen = glm::mix(seen, glm::vec3(camera_floor), camera_floor.a);
+    return floor_fraction * seen;
   };
   const ReflectionLadderBlend blend = specularLadderBlend(roughness, rung_alphas);
   glm::vec3 specular = rung(blend.lower);

@@ -14,19 +14,24 @@
 //
 // R is the specular light: the mirror and glossy maps and the diffuse map
 // form a ladder of lobes (ibl/surface_shading.hpp), and a roughness picks a
-// place on it. A GGX lobe of alpha = roughness^2 reflects, near its peak,
-// like a Phong lobe cos^n about r with n = 1 / (2 alpha^2) - 1/2 (Walter et
-// al. 2007's Beckmann-Phong equivalence, n_h = 2 / alpha^2 - 2, with the
-// reflected lobe a quarter of the half-vector exponent). So each rung has an
-// alpha: 0 for the mirror, 1 / sqrt(2 n + 1) for a glossy map of exponent n
-// (0.062 for n = 128, 0.174 for n = 16), and 1 / sqrt(3) = 0.577 for the
-// diffuse map (its clamped cosine is n = 1, about the normal rather than r:
-// at that width the two differ by a small share of the lobe). A roughness
-// reads the two rungs whose alphas bracket its own, linearly in alpha;
-// rougher than the diffuse rung reads the diffuse map alone.
+// place on it. Each rung stands for the GGX lobe (alpha = roughness^2) it
+// matches best: the split-sum prefilters GGX with n = v = r (Karis 2013),
+// where the lobe over light directions is D(h) / 4 times n.l, and a rung's
+// lobe is its map's own (cos^n about r for a glossy map, the clamped cosine
+// about n for the diffuse map). The rung's alpha is the one whose lobe puts
+// its energy at the same angles: the least-squares fit of the two lobes'
+// cumulative energy against the angle from the axis (1 to 89 degrees).
+// That gives 0.046 for cos^128 and 0.146 for cos^16, and exactly 1 for the
+// diffuse map (GGX at alpha 1 is D = 1 / pi, whose lobe is the cosine).
+// Walter et al. 2007's Beckmann-Phong peak equivalence (alpha =
+// 1 / sqrt(2 n + 1): 0.062, 0.174, 0.577) matches the peaks' curvature
+// alone; GGX's long tail then puts a quarter less of a rough metal's light
+// beside its highlights than the path-traced truth shows. A roughness reads
+// the two rungs whose alphas bracket its own, linearly in alpha.
 //
 // The near floor (ibl/near_floor.hpp): where the specular rungs' direction
-// r goes down, they are read where the ball sees the ground point r meets,
+// r goes down, they are read where the ball sees the ground point r meets
+// (the mirror rung from the camera's frame where it shows the point),
 // times the ground shadow's fraction there. The diffuse rung (about the
 // normal) is left as it is.
 //
@@ -56,7 +61,14 @@ struct MetallicRoughnessSurface {
   glm::vec3 emissive{0.0f};
 };
 
-// The alpha of a Phong lobe cos^n about the reflection direction: 1 / sqrt(2 n + 1).
+// The share of a lobe's energy within theta_rad of its axis: GGX's lobe as
+// the split-sum prefilters it (n = v = r), and a map's cos^n lobe.
+double ggxLobeEnergyWithin(double alpha, double theta_rad);
+double phongLobeEnergyWithin(double exponent, double theta_rad);
+
+// The GGX alpha whose lobe a map's cos^n lobe matches best (the
+// least-squares fit above); exponent 1 is the diffuse map's cosine lobe
+// (alpha 1). Computed once per exponent, then remembered.
 double ggxAlphaOfPhongExponent(double exponent);
 
 // The ladder's rung alphas for these glossy map exponents (sharpest first):
@@ -75,12 +87,15 @@ struct RungRange {
 };
 RungRange specularRungRange(float min_roughness, float max_roughness, const std::vector<double>& rung_alphas);
 
-// The near floor for one surface point: the point, the ball's centre, and
-// the ground shadow's fraction at a ground point (1 where there is none).
+// The near floor for one surface point: the point, the ball's centre, the
+// ground shadow's fraction at a ground point (1 where there is none), and
+// the floor as the camera's frame shows it there: linear RGB and its
+// weight (cameraFloorWeight; 0 where the frame does not show it).
 struct NearFloorShading {
   glm::vec3 point_w{0.0f};
   NearFloorBall ball;
   std::function<glm::vec3(const glm::vec2& ground_point_w)> fraction;
+  std::function<glm::vec4(const glm::vec3& ground_point_w)> camera_floor;
 };
 
 // The lit colour in linear light. normal_w and to_eye_w unit. glossy_maps:

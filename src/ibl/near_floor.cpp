@@ -33,4 +33,11 @@ NearFloorLookup nearFloorLookup(const glm::vec3& point_w, const glm::vec3& direc
   return lookup;
 }
 
+float cameraFloorWeight(const glm::vec2& pixel, int width_px, int height_px) {
+  // The outermost pixels' centres are half a pixel inside the edge.
+  const float inside_px = std::min(std::min(pixel.x + 0.5f, static_cast<float>(width_px) - 0.5f - pixel.x),
+                                   std::min(pixel.y + 0.5f, static_cast<float>(height_px) - 0.5f - pixel.y));
+  return std::clamp(inside_px / kCameraFloorMarginPx, 0.0f, 1.0f);
+}
+
 }  // namespace probelight::ibl

@@ -23,6 +23,15 @@
 // fixed-point steps d <- normalize(g - c - R normalize(d + v)) from the
 // centre's direction; each step shrinks the error by about R / |g - c|.
 //
+// The mirror rung reads the floor from the camera's own frame where the
+// ground point is in it: the camera sees the floor beside the model
+// directly, pixel for pixel (the tag's cells sharp), where the ball shows
+// it squeezed toward its rim, a few pixels for the whole tag. Toward the
+// frame's edge the frame hands over to the maps over kCameraFloorMarginPx,
+// so the reflection has no seam there. The glossy rungs keep the maps: they
+// are the floor already blurred by their lobes, which one camera pixel is
+// not.
+//
 // Where the reflected ray goes up, nothing changes. As it approaches the
 // horizon from below, the ground point runs off to infinity and the
 // corrected direction tends to the ray's own, so there is no seam.
@@ -58,5 +67,11 @@ constexpr int kNearFloorBallSteps = 3;
 
 // From a surface point (z >= 0, W metres) along unit direction_w.
 NearFloorLookup nearFloorLookup(const glm::vec3& point_w, const glm::vec3& direction_w, const NearFloorBall& ball);
+
+// How much the camera's frame is trusted at a pixel (OpenCV's convention:
+// centres at integers): 1 from kCameraFloorMarginPx inside the frame's
+// edge, falling linearly to 0 at the edge, 0 outside.
+constexpr float kCameraFloorMarginPx = 8.0f;
+float cameraFloorWeight(const glm::vec2& pixel, int width_px, int height_px);
 
 }  // namespace probelight::ibl

@@ -176,7 +176,7 @@ bool ModelRenderer::init(const gles::Capabilities& capabilities, CubeStorage sto
   // Every piece's program with the mirror-only ladder now, so a shader that
   // does not build fails here, not mid-run.
   for (const Piece& piece : pieces_)
-    if (programFor(piece, 0, 0, 0, 0, false, error) == nullptr) return false;
+    if (programFor(piece, 0, 0, 0, 0, false, false, error) == nullptr) return false;
   stats_.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return gles::checkGl("ModelRenderer::init", error);
 }
@@ -359,7 +359,8 @@ bool ModelRenderer::uploadPrimitive(const model::Primitive& source, std::size_t 
 }
 
 const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
-                                               int self_shadow_lights, bool floor_shadow, std::string& error) {
+                                               int self_shadow_lights, bool floor_shadow, bool floor_camera,
+                                               std::string& error) {
   std::string defines = cubeStorageDefines(storage_) + piece.defines + "#define GLOSSY_LEVELS " +
                         std::to_string(glossy_levels) + "\n#define RUNG_FIRST " + std::to_string(rung_first) +
                         "\n#define RUNG_LAST " + std::to_string(rung_last) + "\n";
@@ -367,10 +368,17 @@ const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_firs
     defines += "#define SELF_SHADOW_LIGHTS " + std::to_string(self_shadow_lights) + "\n";
     if (self_shadow_packed_) defines += "#define SHADOW_DEPTH_PACKED\n";
   }
-  if (near_floor_) {
+  if (near_floor_.enabled) {
     defines += "#define NEAR_FLOOR\n#define NEAR_FLOOR_MAX_DISTANCE_M " + std::to_string(ibl::kNearFloorMaxDistance_m) +
                "\n#define NEAR_FLOOR_BALL_STEPS " + std::to_string(ibl::kNearFloorBallSteps) + "\n";
     if (floor_shadow) defines += "#define NEAR_FLOOR_SHADOW\n";
+    if (floor_camera) {
+      defines += "#define NEAR_FLOOR_CAMERA\n#define CAMERA_FLOOR_MARGIN_PX " + std::to_string(ibl::kCameraFloorMarginPx) + "\n";
+      if (near_floor_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma)
+        defines += "#define CAMERA_TRANSFER_GAMMA\n";
+      else if (near_floor_.camera_transfer.curve == ibl::CameraTransfer::Curve::kLinear)
+        defines += "#define CAMERA_TRANSFER_LINEAR\n";
+    }
   }
   if (auto found = programs_.find(defines); found != programs_.end()) return &found->second;
   auto program = gles::Program::fromEmbedded("model_object.vert", "model_object.frag", defines, error);
@@ -420,13 +428,7 @@ bool ModelRenderer::prepareEdges(int width_px, int height_px, int target_samples
   return gles::checkGl("ModelRenderer::prepareEdges", error);
 }
 
-void ModelRenderer::setNearFloor(bool enabled, const glm::dvec3& ball_centre_w, double ball_radius_m,
-                                 const GroundShadow* shadow) {
-  near_floor_ = enabled;
-  ball_centre_w_ = glm::vec3(ball_centre_w);
-  ball_radius_m_ = static_cast<float>(ball_radius_m);
-  near_floor_shadow_ = shadow;
-}
+void ModelRenderer::setNearFloor(const NearFloor& near_floor) { near_floor_ = near_floor; }
 
 void ModelRenderer::setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth) {
   self_shadow_ = lights;
@@ -520,11 +522,14 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
   int units_used = 2;  // the diffuse map and the BRDF table
   for (int rung = range.first; rung <= range.last; ++rung) units_used += rung < glossy_levels + 1 ? 1 : 0;
   for (bool used : piece.slot_used) units_used += used ? 1 : 0;
-  // The floor's shadow in the reflections before the self-shadow lights:
-  // one unit against one of eight lights.
-  const bool floor_shadow = near_floor_ && near_floor_shadow_ != nullptr && near_floor_shadow_->hasShadow() &&
+  // The floor's shadow and the camera's view of it in the reflections
+  // before the self-shadow lights: a unit each, against one of eight lights.
+  const bool floor_shadow = near_floor_.enabled && near_floor_.shadow != nullptr && near_floor_.shadow->hasShadow() &&
                             units_used < capabilities_.max_fragment_texture_units;
   units_used += floor_shadow ? 1 : 0;
+  const bool floor_camera = near_floor_.enabled && near_floor_.camera_frame != nullptr && range.first == 0 &&
+                            units_used < capabilities_.max_fragment_texture_units;
+  units_used += floor_camera ? 1 : 0;
   int self_shadow_lights = 0;
   if (self_shadow_ != nullptr && self_shadow_map_size_px_ > 0)
     self_shadow_lights = std::max(0, std::min({static_cast<int>(self_shadow_->size()),
@@ -532,7 +537,7 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
                                                (capabilities_.max_fragment_uniform_vectors - 48) / 6}));
   self_shadow_lights_read_ = self_shadow_lights;
   const gles::Program* found =
-      programFor(piece, range.first, range.last, glossy_levels, self_shadow_lights, floor_shadow, error);
+      programFor(piece, range.first, range.last, glossy_levels, self_shadow_lights, floor_shadow, floor_camera, error);
   if (found == nullptr) return false;
   const gles::Program& program = *found;
   program.use();
@@ -591,20 +596,40 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
     glUniform3fv(program.uniform("u_self_shadow_rgb"), n, glm::value_ptr(rgb[0]));
     glUniform2fv(program.uniform("u_self_shadow_texel"), n, glm::value_ptr(texels[0]));
   }
-  if (near_floor_) {
-    glUniform3fv(program.uniform("u_ball_centre_w"), 1, glm::value_ptr(ball_centre_w_));
-    glUniform1f(program.uniform("u_ball_radius_m"), ball_radius_m_);
+  if (near_floor_.enabled) {
+    glUniform3fv(program.uniform("u_ball_centre_w"), 1, glm::value_ptr(glm::vec3(near_floor_.ball_centre_w)));
+    glUniform1f(program.uniform("u_ball_radius_m"), static_cast<float>(near_floor_.ball_radius_m));
     // The camera that sees the ball now: the one the maps were last made
     // from, give or take a steady camera's drift (maps_stage remakes them
     // only for a steady view).
-    const glm::dvec3 to_eye = pose.cameraCenterWorld() - glm::dvec3(ball_centre_w_);
+    const glm::dvec3 to_eye = pose.cameraCenterWorld() - near_floor_.ball_centre_w;
     const double to_eye_length = glm::length(to_eye);
     const glm::vec3 to_eye_w = to_eye_length > 0.0 ? glm::vec3(to_eye / to_eye_length) : glm::vec3(0.0f, 0.0f, 1.0f);
     glUniform3fv(program.uniform("u_ball_to_eye_w"), 1, glm::value_ptr(to_eye_w));
-    if (floor_shadow) {
-      const ibl::GroundRegion& region = near_floor_shadow_->region();
+    if (floor_camera) {
       glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
-      glBindTexture(GL_TEXTURE_2D, near_floor_shadow_->fractionTexture());
+      glBindTexture(GL_TEXTURE_2D, near_floor_.camera_frame->texture());
+      glUniform1i(program.uniform("u_floor_camera"), unit++);
+      const glm::mat3 rotation(pose.R_cam_from_world);
+      glUniformMatrix3fv(program.uniform("u_floor_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
+      glUniform3fv(program.uniform("u_floor_translation_cam_from_world"), 1,
+                   glm::value_ptr(glm::vec3(pose.t_cam_from_world)));
+      glUniform4f(program.uniform("u_floor_distortion"), static_cast<float>(camera.distortion[0]),
+                  static_cast<float>(camera.distortion[1]), static_cast<float>(camera.distortion[2]),
+                  static_cast<float>(camera.distortion[3]));
+      glUniform1f(program.uniform("u_floor_distortion_k3"), static_cast<float>(camera.distortion[4]));
+      glUniform2f(program.uniform("u_floor_focal_px"), static_cast<float>(camera.fx_px), static_cast<float>(camera.fy_px));
+      glUniform2f(program.uniform("u_floor_principal_px"), static_cast<float>(camera.cx_px),
+                  static_cast<float>(camera.cy_px));
+      glUniform2f(program.uniform("u_floor_image_size_px"), static_cast<float>(camera.width_px),
+                  static_cast<float>(camera.height_px));
+      if (near_floor_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma)
+        glUniform1f(program.uniform("u_camera_gamma"), static_cast<float>(near_floor_.camera_transfer.gamma));
+    }
+    if (floor_shadow) {
+      const ibl::GroundRegion& region = near_floor_.shadow->region();
+      glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
+      glBindTexture(GL_TEXTURE_2D, near_floor_.shadow->fractionTexture());
       glUniform1i(program.uniform("u_ground_fraction"), unit++);
       glUniform3f(program.uniform("u_ground_region"), static_cast<float>(region.centre_w.x),
                   static_cast<float>(region.centre_w.y), static_cast<float>(0.5 / region.half_size_m));

@@ -46,6 +46,8 @@
 #include "ibl/surface_shading.hpp"
 #include "model/mesh_model.hpp"
 #include "passes/edge_antialiasing.hpp"
+#include "ibl/color_transfer.hpp"
+#include "passes/camera_frame_texture.hpp"
 #include "passes/environment_maps.hpp"
 #include "passes/ground_shadow.hpp"
 
@@ -110,12 +112,19 @@ class ModelRenderer {
   int selfShadowLightsRead() const { return self_shadow_lights_read_; }
 
   // The floor beside the model in its reflections (ibl/near_floor.hpp):
-  // specular directions that go down are read where the maps, made from the
-  // ball at ball_centre_w (as the camera sees it now), show the ground they
-  // meet, darkened by `shadow`'s fraction there (null, or one without a
-  // shadow: not darkened). Until set again; off by default (the maps read
-  // as they are).
-  void setNearFloor(bool enabled, const glm::dvec3& ball_centre_w, double ball_radius_m, const GroundShadow* shadow);
+  // specular directions that go down are read where the maps show the
+  // ground they meet (the mirror rung from the camera's frame where it
+  // shows it), darkened by the shadow's fraction there. Until set again;
+  // off by default (the maps read as they are).
+  struct NearFloor {
+    bool enabled = false;
+    glm::dvec3 ball_centre_w{0.0};  // the ball the maps were made from (seen by draw()'s camera)
+    double ball_radius_m = 0.0;
+    const GroundShadow* shadow = nullptr;             // null, or without a shadow: not darkened
+    const CameraFrameTexture* camera_frame = nullptr;  // null: the maps alone
+    ibl::CameraTransfer camera_transfer;               // how the frame's bytes decode to light
+  };
+  void setNearFloor(const NearFloor& near_floor);
 
   // Chooses the edge anti-aliasing for frames of width_px x height_px drawn
   // into a framebuffer with target_samples (GL_SAMPLES; 0 single-sampled)
@@ -156,7 +165,7 @@ class ModelRenderer {
                        std::string& error);
   const gles::Texture* textureFor(const model::MeshModel& model, const model::TextureSlot& slot, std::string& error);
   const gles::Program* programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
-                                  int self_shadow_lights, bool floor_shadow, std::string& error);
+                                  int self_shadow_lights, bool floor_shadow, bool floor_camera, std::string& error);
   bool drawPiece(const Piece& piece, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                  const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
                  const std::vector<double>& rung_alphas, std::string& error);
@@ -174,10 +183,7 @@ class ModelRenderer {
   int self_shadow_map_size_px_ = 0;
   bool self_shadow_packed_ = false;
   int self_shadow_lights_read_ = 0;
-  bool near_floor_ = false;
-  glm::vec3 ball_centre_w_{0.0f};
-  float ball_radius_m_ = 0.0f;
-  const GroundShadow* near_floor_shadow_ = nullptr;
+  NearFloor near_floor_;
   ModelUploadStats stats_;
   std::vector<std::string> warnings_;
   // What chooseEdgeAntialiasing said for the frame size below (the layer may

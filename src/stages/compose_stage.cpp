@@ -40,8 +40,13 @@ const std::vector<std::uint8_t>& StatusOverlay::render(const std::string& text, 
 }
 
 ComposeStage::ComposeStage(const SceneObject& object, const CameraIntrinsics& camera, const RigGeometry& rig,
-                           RunReport& report, bool finish_gpu)
-    : object_(object), camera_(camera), rig_(rig), report_(report), finish_gpu_(finish_gpu) {
+                           const ibl::CameraTransfer& camera_transfer, RunReport& report, bool finish_gpu)
+    : object_(object),
+      camera_(camera),
+      rig_(rig),
+      camera_transfer_(camera_transfer),
+      report_(report),
+      finish_gpu_(finish_gpu) {
   if (object_.shape.shape == ibl::ShadowCaster::Shape::kBox) mesh_ = passes::boxMesh(object_.shape);
 }
 
@@ -92,9 +97,16 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
       model_renderer_.setSelfShadow(&shadows.pass().selfShadowLights(), shadows.pass().shadowMapSizePx(),
                                     shadows.pass().packedDepth());
     // A model reflects the floor beside it, with its own shadow there.
-    if (object_.isModel())
-      model_renderer_.setNearFloor(true, rig_.probe_center_w, rig_.probe_radius_m,
-                                   shadows.enabled() ? &shadows.pass() : nullptr);
+    if (object_.isModel()) {
+      passes::ModelRenderer::NearFloor near_floor;
+      near_floor.enabled = true;
+      near_floor.ball_centre_w = rig_.probe_center_w;
+      near_floor.ball_radius_m = rig_.probe_radius_m;
+      near_floor.shadow = shadows.enabled() ? &shadows.pass() : nullptr;
+      near_floor.camera_frame = &frame;
+      near_floor.camera_transfer = camera_transfer_;
+      model_renderer_.setNearFloor(near_floor);
+    }
     const bool drawn =
         object_.isModel() ? model_renderer_.draw(camera_, track.pose, lighting, maps.maps(), error)
         : mesh_.empty()

@@ -41,11 +41,12 @@ class ComposeStage {
  public:
   static constexpr const char* kStageName = "render";
 
-  // rig: where the ball stands, which the maps see the world from: a
-  // model's reflection of the floor beside it is read from there
+  // rig: where the ball stands, which the maps see the world from, and
+  // camera_transfer how the frame's bytes decode to light: a model's
+  // reflection of the floor beside it is read from the maps and the frame
   // (ibl/near_floor.hpp).
-  ComposeStage(const SceneObject& object, const CameraIntrinsics& camera, const RigGeometry& rig, RunReport& report,
-               bool finish_gpu);
+  ComposeStage(const SceneObject& object, const CameraIntrinsics& camera, const RigGeometry& rig,
+               const ibl::CameraTransfer& camera_transfer, RunReport& report, bool finish_gpu);
   // `storage`: the maps' (the object's shaders decode them).
   Status init(const gles::Capabilities& capabilities, passes::CubeStorage storage);
 
@@ -60,6 +61,7 @@ class ComposeStage {
   SceneObject object_;
   CameraIntrinsics camera_;
   RigGeometry rig_;
+  ibl::CameraTransfer camera_transfer_;
   RunReport& report_;
   bool finish_gpu_;
   passes::ObjectCompositor compositor_;

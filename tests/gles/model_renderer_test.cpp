@@ -246,10 +246,12 @@ INSTANTIATE_TEST_SUITE_P(Storage, ModelShadingTest, ::testing::Values(false, tru
 
 // The floor beside the model in its reflections (ibl/near_floor.hpp): the
 // quad's lower half reflects the ground in front of it, where a sphere's
-// shadow lies. The GPU against the CPU reference with the same lookup and
-// the ground texture's fractions (read back, filtered bilinearly as GL's
-// LINEAR does), within the shading test's 1.5 levels; and the reference
-// without the near floor is many levels off, so the check can tell.
+// shadow lies, and which the camera's frame (a colour ramp here) shows.
+// The GPU against the CPU reference with the same lookup, the ground
+// texture's fractions (read back, filtered bilinearly as GL's LINEAR does)
+// and the frame's bytes (filtered, then decoded, as the shader samples
+// them), within the shading test's 1.5 levels; and the reference without
+// the near floor is many levels off, so the check can tell.
 //
 // The camera has no lens distortion here: the GPU distorts a mesh's
 // vertices and rasterises straight between them, so inside this quad's two
@@ -297,6 +299,34 @@ TEST_F(GpuTest, NearFloorReflectionsMatchTheCpuReference) {
     return glm::mix(glm::mix(at(i0, j0), at(i0 + 1, j0), fx), glm::mix(at(i0, j0 + 1), at(i0 + 1, j0 + 1), fx), fy);
   };
 
+  // The frame: red across, green down.
+  ImageRGB8 ramp;
+  ramp.resize(stage.camera.width_px, stage.camera.height_px);
+  for (int y = 0; y < ramp.height; ++y)
+    for (int x = 0; x < ramp.width; ++x) {
+      std::uint8_t* p = ramp.row(y) + 3 * x;
+      p[0] = static_cast<std::uint8_t>(40 + 200 * x / ramp.width);
+      p[1] = static_cast<std::uint8_t>(30 + 200 * y / ramp.height);
+      p[2] = 120;
+    }
+  ASSERT_TRUE(stage.frame.upload(ramp, error)) << error;
+  auto cameraFloorAt = [&](const glm::vec3& ground_w) {
+    const glm::dvec3 p = stage.pose.toCamera(glm::dvec3(ground_w));
+    if (!(p.z > 1e-3)) return glm::vec4(0.0f);
+    const glm::dvec2 pixel = ibl::projectToPixel(stage.camera, p);
+    const float weight = ibl::cameraFloorWeight(glm::vec2(pixel), ramp.width, ramp.height);
+    const double fx = std::clamp(pixel.x, 0.0, ramp.width - 1.0), fy = std::clamp(pixel.y, 0.0, ramp.height - 1.0);
+    const int x0 = std::min(static_cast<int>(fx), ramp.width - 2), y0 = std::min(static_cast<int>(fy), ramp.height - 2);
+    const double u = fx - x0, v = fy - y0;
+    glm::vec4 seen(0.0f, 0.0f, 0.0f, weight);
+    for (int k = 0; k < 3; ++k) {
+      auto at = [&](int x, int y) { return ramp.row(y)[3 * x + k] / 255.0; };
+      const double byte = (1 - v) * ((1 - u) * at(x0, y0) + u * at(x0 + 1, y0)) + v * ((1 - u) * at(x0, y0 + 1) + u * at(x0 + 1, y0 + 1));
+      seen[k] = static_cast<float>(ibl::srgbToLinear(byte));
+    }
+    return seen;
+  };
+
   ibl::NearFloorBall ball;
   ball.centre_w = {0.12f, -0.10f, 0.09f};
   ball.radius_m = 0.03f;
@@ -310,7 +340,13 @@ TEST_F(GpuTest, NearFloorReflectionsMatchTheCpuReference) {
     const model::MeshModel quad = texturedQuad(material, false);
     passes::ModelRenderer renderer;
     ASSERT_TRUE(renderer.init(caps, stage.maps.storage(), quad, glm::dmat4(1.0), {}, error)) << error;
-    renderer.setNearFloor(true, glm::dvec3(ball.centre_w), ball.radius_m, &shadow);
+    passes::ModelRenderer::NearFloor settings;
+    settings.enabled = true;
+    settings.ball_centre_w = glm::dvec3(ball.centre_w);
+    settings.ball_radius_m = ball.radius_m;
+    settings.shadow = &shadow;
+    settings.camera_frame = &stage.frame;
+    renderer.setNearFloor(settings);
     ImageRGB8 result;
     ASSERT_TRUE(renderModel(stage, renderer, result, error)) << error;
     const glm::dvec3 eye = stage.pose.cameraCenterWorld();
@@ -333,6 +369,7 @@ TEST_F(GpuTest, NearFloorReflectionsMatchTheCpuReference) {
         near_floor.point_w = glm::vec3(eye + (-eye.y / ray.y) * ray);
         near_floor.ball = ball;
         near_floor.fraction = fractionAt;
+        near_floor.camera_floor = cameraFloorAt;
         const glm::vec3 linear = ibl::shadeMetallicRoughness({0, -1, 0}, to_eye, surface, *stage.diffuse,
                                                              *stage.reflection, glossy, rung_alphas, table, {},
                                                              &near_floor);

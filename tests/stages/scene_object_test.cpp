@@ -26,12 +26,13 @@ std::shared_ptr<model::MeshModel> triangleModel(float roughness) {
 }
 
 // Glossy maps are made only for a roughness between the mirror and the
-// diffuse rung (ibl/metallic_roughness.hpp: alphas 0, 0.062, 0.174, 0.577;
-// roughness = sqrt(alpha): 0.25, 0.42, 0.76).
+// diffuse rung (ibl/metallic_roughness.hpp: alphas 0, 0.046, 0.146, 1;
+// roughness = sqrt(alpha): 0.21, 0.38, 1): a perfect mirror and glTF's
+// fully rough default read none.
 TEST(SceneObject, AModelReadsGlossyMapsOnlyForRoughnessBetweenMirrorAndMatte) {
   const std::vector<double> exponents{128.0, 16.0};
-  for (const auto& [roughness, reads] : {std::pair{0.0f, false}, {1.0f, false}, {0.8f, false}, {0.1f, true},
-                                         {0.3f, true}, {0.5f, true}, {0.7f, true}}) {
+  for (const auto& [roughness, reads] : {std::pair{0.0f, false}, {1.0f, false}, {0.8f, true}, {0.1f, true},
+                                         {0.3f, true}, {0.5f, true}, {0.95f, true}}) {
     auto m = triangleModel(roughness);
     // Every primitive has a material here, but glTF's default (roughness 1)
     // stands by for those that do not, and must not count on its own.
