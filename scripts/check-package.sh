@@ -13,7 +13,7 @@ status=0
 for path in ./usr/bin/probelight ./usr/lib/systemd/system/probelight.service ./usr/lib/sysusers.d/probelight.conf \
             ./etc/probelight/probelight.yaml ./etc/probelight/camera.yaml ./etc/probelight/rig.yaml \
             ./usr/share/doc/probelight/raspberry-pi.md ./usr/share/doc/probelight/config.txt \
-            ./usr/share/doc/probelight/probelight.yaml; do
+            ./usr/share/doc/probelight/probelight.yaml ./usr/share/probelight/models/ceramic-bowl.glb; do
   grep -qx -- "$path" <<<"$contents" || { echo "missing from $deb: $path"; status=1; }
 done
 control=$(mktemp -d)

@@ -217,6 +217,44 @@ float nearDepth(sampler2D map, vec2 uv) {
 #endif
 }
 
+// The share of a point a light's near-side map says is lit: a 2x2
+// percentage-closer test at its place in the map.
+float litShare(sampler2D map, vec4 row0, vec4 row1, vec4 row2, vec2 texel, vec3 l, vec3 surface_normal, vec4 p) {
+  vec2 uv = vec2(dot(row0, p), dot(row1, p));
+  float depth = dot(row2, p);
+  // Slope-scaled bias: across one texel the surface's own depth changes by
+  // the texel's width times tan(angle to the light); 1.5 of that plus 1.5
+  // texels keeps a lit surface from shadowing itself (acne) while a real
+  // occluder further than two texels still shadows.
+  float cos_surface = max(dot(surface_normal, l), 0.05);
+  float tan_surface = min(sqrt(1.0 - cos_surface * cos_surface) / cos_surface, 8.0);
+  float bias = (1.5 + 1.5 * tan_surface) * texel.y;
+  float half_texel = 0.5 * texel.x;
+  float lit = 0.0;
+  lit += nearDepth(map, uv + vec2(-half_texel, -half_texel)) + bias >= depth ? 0.25 : 0.0;
+  lit += nearDepth(map, uv + vec2(half_texel, -half_texel)) + bias >= depth ? 0.25 : 0.0;
+  lit += nearDepth(map, uv + vec2(-half_texel, half_texel)) + bias >= depth ? 0.25 : 0.0;
+  lit += nearDepth(map, uv + vec2(half_texel, half_texel)) + bias >= depth ? 0.25 : 0.0;
+  return lit;
+}
+
+#ifdef SELF_SHADOW_FLOOR_LIGHTS
+// The floor's light (passes/ground_shadow's floorSelfShadows: the object
+// seen from directions below the horizon). The floor is Lambertian and,
+// under a model, uniform enough that a normal n receives E_down (1 - n.z) / 2
+// of it, E_down = pi D(-Z) being the irradiance of a face looking straight
+// down. It is shared among the floor directions in front of the point,
+// by max(0, n.L_k), and each share is hidden where the point is not the
+// object's surface nearest the floor along L_k (the inside of a bowl sees
+// its own walls there, not the floor).
+uniform sampler2D u_self_shadow_floor_map[SELF_SHADOW_FLOOR_LIGHTS];
+uniform vec4 u_self_shadow_floor_row0[SELF_SHADOW_FLOOR_LIGHTS];
+uniform vec4 u_self_shadow_floor_row1[SELF_SHADOW_FLOOR_LIGHTS];
+uniform vec4 u_self_shadow_floor_row2[SELF_SHADOW_FLOOR_LIGHTS];
+uniform vec3 u_self_shadow_floor_direction[SELF_SHADOW_FLOOR_LIGHTS];
+uniform vec2 u_self_shadow_floor_texel[SELF_SHADOW_FLOOR_LIGHTS];
+#endif
+
 vec3 selfShadowVisibility(vec3 position, vec3 surface_normal, vec3 n, vec3 diffuse) {
   vec3 hidden = vec3(0.0);
   vec4 p = vec4(position, 1.0);
@@ -224,23 +262,29 @@ vec3 selfShadowVisibility(vec3 position, vec3 surface_normal, vec3 n, vec3 diffu
     vec3 l = u_self_shadow_direction[i];
     float cos_shading = dot(n, l);
     if (cos_shading <= 0.0) continue;
-    vec2 uv = vec2(dot(u_self_shadow_row0[i], p), dot(u_self_shadow_row1[i], p));
-    float depth = dot(u_self_shadow_row2[i], p);
-    // Slope-scaled bias: across one texel the surface's own depth changes by
-    // the texel's width times tan(angle to the light); 1.5 of that plus 1.5
-    // texels keeps a lit surface from shadowing itself (acne) while a real
-    // occluder further than two texels still shadows.
-    float cos_surface = max(dot(surface_normal, l), 0.05);
-    float tan_surface = min(sqrt(1.0 - cos_surface * cos_surface) / cos_surface, 8.0);
-    float bias = (1.5 + 1.5 * tan_surface) * u_self_shadow_texel[i].y;
-    float half_texel = 0.5 * u_self_shadow_texel[i].x;
-    float lit = 0.0;
-    lit += nearDepth(u_self_shadow_map[i], uv + vec2(-half_texel, -half_texel)) + bias >= depth ? 0.25 : 0.0;
-    lit += nearDepth(u_self_shadow_map[i], uv + vec2(half_texel, -half_texel)) + bias >= depth ? 0.25 : 0.0;
-    lit += nearDepth(u_self_shadow_map[i], uv + vec2(-half_texel, half_texel)) + bias >= depth ? 0.25 : 0.0;
-    lit += nearDepth(u_self_shadow_map[i], uv + vec2(half_texel, half_texel)) + bias >= depth ? 0.25 : 0.0;
+    float lit = litShare(u_self_shadow_map[i], u_self_shadow_row0[i], u_self_shadow_row1[i], u_self_shadow_row2[i],
+                         u_self_shadow_texel[i], l, surface_normal, p);
     hidden += u_self_shadow_rgb[i] * cos_shading * (1.0 - lit);
   }
+#ifdef SELF_SHADOW_FLOOR_LIGHTS
+  float floor_share = 0.5 - 0.5 * n.z;
+  if (floor_share > 0.0) {
+    float weight_sum = 0.0;
+    float hidden_weight = 0.0;
+    for (int k = 0; k < SELF_SHADOW_FLOOR_LIGHTS; ++k) {
+      vec3 l = u_self_shadow_floor_direction[k];
+      float weight = max(dot(n, l), 0.0);
+      if (weight <= 0.0) continue;
+      float lit = litShare(u_self_shadow_floor_map[k], u_self_shadow_floor_row0[k], u_self_shadow_floor_row1[k],
+                           u_self_shadow_floor_row2[k], u_self_shadow_floor_texel[k], l, surface_normal, p);
+      weight_sum += weight;
+      hidden_weight += weight * (1.0 - lit);
+    }
+    vec3 e_down =
+        3.14159265 * sampleCubeBilinear(u_diffuse_map, vec3(0.0, 0.0, -1.0), u_diffuse_face_size, u_diffuse_scale).rgb;
+    if (weight_sum > 0.0) hidden += e_down * floor_share * hidden_weight / weight_sum;
+  }
+#endif
   return clamp(1.0 - hidden / max(3.14159265 * diffuse, vec3(1e-4)), 0.0, 1.0);
 }
 #endif
@@ -358,6 +402,14 @@ void main() {
   // about the reflection are not resolved): a common approximation, and
   // the one that keeps a shadowed crevice from showing the sky in a metal.
   vec3 visibility = selfShadowVisibility(v_position_w, normalize(v_normal_w), n, diffuse);
+  // Light the model bounces onto itself where it hides the room:
+  // ibl::multiBounceVisibility (Jimenez et al.'s fit, 2016), with the
+  // surface's own reflectance standing for its surroundings'.
+  vec3 albedo = clamp(c_diff + f0, 0.0, 1.0);
+  vec3 bounce_a = 2.0404 * albedo - 0.3324;
+  vec3 bounce_b = -4.7951 * albedo + 0.6417;
+  vec3 bounce_c = 2.7552 * albedo + 0.6903;
+  visibility = max(visibility, ((visibility * bounce_a + bounce_b) * visibility + bounce_c) * visibility);
   vec3 color = occlusion * visibility * (c_diff * (1.0 - specular_reflectance) * diffuse + specular_reflectance * specular) + emissive;
 #else
   vec3 color = occlusion * (c_diff * (1.0 - specular_reflectance) * diffuse + specular_reflectance * specular) + emissive;

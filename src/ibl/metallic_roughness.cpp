@@ -83,6 +83,13 @@ double fitGgxAlpha(double exponent) {
 
 }  // namespace
 
+glm::vec3 multiBounceVisibility(const glm::vec3& visibility, const glm::vec3& albedo) {
+  const glm::vec3 a = 2.0404f * albedo - 0.3324f;
+  const glm::vec3 b = -4.7951f * albedo + 0.6417f;
+  const glm::vec3 c = 2.7552f * albedo + 0.6903f;
+  return glm::max(visibility, ((visibility * a + b) * visibility + c) * visibility);
+}
+
 double ggxLobeEnergyWithin(double alpha, double theta_rad) {
   const double step = 0.5 * kPi / kLobeSteps;
   double within = 0.0, total = 0.0;

@@ -98,6 +98,16 @@ struct NearFloorShading {
   std::function<glm::vec4(const glm::vec3& ground_point_w)> camera_floor;
 };
 
+// A point's self-shadow visibility (the share of its light its own model
+// leaves it) lifted by the light the model bounces onto it from where it
+// hides the room: Jimenez, Wu, Pesce and Jarabo's multi-bounce fit
+// ("Practical real-time strategies for accurate indirect occlusion", 2016),
+// V' = max(V, ((a V + b) V + c) V) with a, b, c linear in the albedo, made
+// from path-traced ambient occlusion over many scenes. The albedo is the
+// surface's own reflectance, standing for its surroundings' on the model.
+// Per channel; V and albedo in [0, 1]; V' is V at albedo 0 and 1 at V = 1.
+glm::vec3 multiBounceVisibility(const glm::vec3& visibility, const glm::vec3& albedo);
+
 // The lit colour in linear light. normal_w and to_eye_w unit. glossy_maps:
 // sharpest first, their exponents the ones rung_alphas were made from.
 glm::vec3 shadeMetallicRoughness(const glm::vec3& normal_w, const glm::vec3& to_eye_w,

@@ -222,6 +222,11 @@ bool GroundShadow::ensureShadowMaps(std::size_t count, std::string& error) {
     if (!allocateShadowMap(map, error)) return false;
     near_maps_.push_back(std::move(map));
   }
+  while (settings_.self_shadow_maps && floor_maps_.size() < static_cast<std::size_t>(kFloorLightCount)) {
+    ShadowMap map;
+    if (!allocateShadowMap(map, error)) return false;
+    floor_maps_.push_back(std::move(map));
+  }
   return true;
 }
 
@@ -281,6 +286,7 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   shadow_passes_last_update_ = 0;
   has_shadow_ = false;
   self_shadow_lights_.clear();
+  floor_self_shadows_.clear();
   if (lights.empty()) return true;
   if (!ensureShadowMaps(lights.size(), error)) return false;
   region_ = ibl::groundShadowRegion(caster, lights, settings_.max_region_half_size_m);
@@ -360,6 +366,32 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
       light.depth_range_m = static_cast<float>(views[i].depth_m);
       light.width_m = static_cast<float>(views[i].width_m);
       self_shadow_lights_.push_back(light);
+    }
+    // And from below the horizon: the floor's light, which no dome light
+    // carries (they are all above it). Directions 30 degrees down, so that
+    // a face turned up to 60 degrees still has one in front of it (the
+    // floor it sees lies low and outward).
+    const double elevation = glm::radians(kFloorLightElevationDeg);
+    for (int k = 0; k < kFloorLightCount; ++k) {
+      const double azimuth = 2.0 * M_PI * k / kFloorLightCount;
+      const glm::dvec3 direction(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+                                 std::sin(elevation));
+      const LightView below = lightViewFor(direction, centre, radius);
+      ShadowMap& map = floor_maps_[static_cast<std::size_t>(k)];
+      glBindFramebuffer(GL_FRAMEBUFFER, map.framebuffer.id());
+      glViewport(0, 0, size, size);
+      glClearColor(1.0f, 1.0f, 0.0f, 1.0f);
+      glClearDepthf(1.0f);
+      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+      if (!drawCasterDepth(glm::mat4(below.clip_from_world), error)) return false;
+      ++shadow_passes_last_update_;
+      SelfShadowLight light;
+      light.map = map.depth_or_colour.id();
+      light.clip_from_world = glm::mat4(below.clip_from_world);
+      light.direction_w = glm::vec3(direction);
+      light.depth_range_m = static_cast<float>(below.depth_m);
+      light.width_m = static_cast<float>(below.width_m);
+      floor_self_shadows_.push_back(light);
     }
     glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
     // Strongest first: a GPU with fewer texture units reads the first ones.

@@ -81,6 +81,14 @@ class GroundShadow {
   // The lights of the last update with their near-side maps (empty unless
   // settings.self_shadow_maps), strongest first.
   const std::vector<SelfShadowLight>& selfShadowLights() const { return self_shadow_lights_; }
+  // The object's near side seen from below the horizon, from
+  // kFloorLightCount directions kFloorLightElevationDeg down (rgb 0): for
+  // the floor's light, which no dome light carries, where the object hides
+  // it from itself (the inside of a bowl sees its own walls, not the floor).
+  // Made with the near-side maps; empty when there are none.
+  static constexpr int kFloorLightCount = 4;
+  static constexpr double kFloorLightElevationDeg = -30.0;
+  const std::vector<SelfShadowLight>& floorSelfShadows() const { return floor_self_shadows_; }
   int shadowMapSizePx() const { return settings_.shadow_map_size_px; }
   const ibl::GroundRegion& region() const { return region_; }
   // The fraction texture (RGBA8, LINEAR, over region()), for a model's
@@ -116,6 +124,8 @@ class GroundShadow {
   std::vector<ShadowMap> shadow_maps_;
   std::vector<ShadowMap> near_maps_;  // self_shadow_maps: the object's near side
   std::vector<SelfShadowLight> self_shadow_lights_;
+  std::vector<ShadowMap> floor_maps_;  // self_shadow_maps: the object from below the horizon
+  std::vector<SelfShadowLight> floor_self_shadows_;
   gles::Texture ground_texture_;
   gles::Framebuffer ground_framebuffer_;
   gles::Buffer caster_vertices_;

@@ -176,7 +176,7 @@ bool ModelRenderer::init(const gles::Capabilities& capabilities, CubeStorage sto
   // Every piece's program with the mirror-only ladder now, so a shader that
   // does not build fails here, not mid-run.
   for (const Piece& piece : pieces_)
-    if (programFor(piece, 0, 0, 0, 0, false, false, error) == nullptr) return false;
+    if (programFor(piece, 0, 0, 0, 0, 0, false, false, error) == nullptr) return false;
   stats_.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return gles::checkGl("ModelRenderer::init", error);
 }
@@ -359,14 +359,15 @@ bool ModelRenderer::uploadPrimitive(const model::Primitive& source, std::size_t 
 }
 
 const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
-                                               int self_shadow_lights, bool floor_shadow, bool floor_camera,
-                                               std::string& error) {
+                                               int self_shadow_lights, int self_shadow_floor, bool floor_shadow,
+                                               bool floor_camera, std::string& error) {
   std::string defines = cubeStorageDefines(storage_) + piece.defines + "#define GLOSSY_LEVELS " +
                         std::to_string(glossy_levels) + "\n#define RUNG_FIRST " + std::to_string(rung_first) +
                         "\n#define RUNG_LAST " + std::to_string(rung_last) + "\n";
   if (self_shadow_lights > 0) {
     defines += "#define SELF_SHADOW_LIGHTS " + std::to_string(self_shadow_lights) + "\n";
     if (self_shadow_packed_) defines += "#define SHADOW_DEPTH_PACKED\n";
+    if (self_shadow_floor > 0) defines += "#define SELF_SHADOW_FLOOR_LIGHTS " + std::to_string(self_shadow_floor) + "\n";
   }
   if (near_floor_.enabled) {
     defines += "#define NEAR_FLOOR\n#define NEAR_FLOOR_MAX_DISTANCE_M " + std::to_string(ibl::kNearFloorMaxDistance_m) +
@@ -430,8 +431,10 @@ bool ModelRenderer::prepareEdges(int width_px, int height_px, int target_samples
 
 void ModelRenderer::setNearFloor(const NearFloor& near_floor) { near_floor_ = near_floor; }
 
-void ModelRenderer::setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth) {
+void ModelRenderer::setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth,
+                                  const std::vector<SelfShadowLight>* floor) {
   self_shadow_ = lights;
+  self_shadow_floor_ = floor;
   self_shadow_map_size_px_ = map_size_px;
   self_shadow_packed_ = packed_depth;
 }
@@ -509,6 +512,41 @@ bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld&
   return gles::checkGl("ModelRenderer::draw", error);
 }
 
+void ModelRenderer::bindSelfShadowLights(const gles::Program& program, const std::string& prefix,
+                                         const std::vector<SelfShadowLight>& lights, int count, int& unit) const {
+  std::vector<GLint> units;
+  std::vector<glm::vec4> row0, row1, row2;
+  std::vector<glm::vec3> directions, rgb;
+  std::vector<glm::vec2> texels;
+  for (int i = 0; i < count; ++i) {
+    const SelfShadowLight& light = lights[static_cast<size_t>(i)];
+    glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
+    glBindTexture(GL_TEXTURE_2D, light.map);
+    units.push_back(unit++);
+    // uv = 0.5 clip.xy + 0.5 and depth01 = 0.5 clip.z + 0.5 (orthographic: w = 1).
+    const glm::mat4 m = light.clip_from_world;
+    auto row = [&](int r) { return glm::vec4(m[0][r], m[1][r], m[2][r], m[3][r]); };
+    const glm::vec4 half_w(0.0f, 0.0f, 0.0f, 0.5f);
+    row0.push_back(0.5f * row(0) + half_w);
+    row1.push_back(0.5f * row(1) + half_w);
+    row2.push_back(0.5f * row(2) + half_w);
+    directions.push_back(light.direction_w);
+    rgb.push_back(light.rgb);
+    const float texel_uv = 1.0f / static_cast<float>(self_shadow_map_size_px_);
+    texels.emplace_back(texel_uv, light.depth_range_m > 0.0f ? light.width_m * texel_uv / light.depth_range_m : 0.0f);
+  }
+  // Names the program lacks (the floor's lights have no rgb) are location
+  // -1, which GL ignores.
+  auto name = [&](const char* suffix) { return prefix + suffix; };
+  glUniform1iv(program.uniform(name("_map").c_str()), count, units.data());
+  glUniform4fv(program.uniform(name("_row0").c_str()), count, glm::value_ptr(row0[0]));
+  glUniform4fv(program.uniform(name("_row1").c_str()), count, glm::value_ptr(row1[0]));
+  glUniform4fv(program.uniform(name("_row2").c_str()), count, glm::value_ptr(row2[0]));
+  glUniform3fv(program.uniform(name("_direction").c_str()), count, glm::value_ptr(directions[0]));
+  glUniform3fv(program.uniform(name("_rgb").c_str()), count, glm::value_ptr(rgb[0]));
+  glUniform2fv(program.uniform(name("_texel").c_str()), count, glm::value_ptr(texels[0]));
+}
+
 bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                               const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
                               const std::vector<double>& rung_alphas, std::string& error) {
@@ -530,14 +568,28 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
   const bool floor_camera = near_floor_.enabled && near_floor_.camera_frame != nullptr && range.first == 0 &&
                             units_used < capabilities_.max_fragment_texture_units;
   units_used += floor_camera ? 1 : 0;
+  // The floor's light hidden by the model itself: a unit and 5 vectors a
+  // direction, all or none, with at least one dome light left beside them
+  // (without the dome there is no self-shadow to speak of).
+  int self_shadow_floor = 0;
+  if (self_shadow_ != nullptr && !self_shadow_->empty() && self_shadow_map_size_px_ > 0 &&
+      self_shadow_floor_ != nullptr && !self_shadow_floor_->empty()) {
+    const int wanted = static_cast<int>(self_shadow_floor_->size());
+    if (units_used + wanted < capabilities_.max_fragment_texture_units &&
+        48 + 5 * wanted + 6 <= capabilities_.max_fragment_uniform_vectors)
+      self_shadow_floor = wanted;
+  }
+  units_used += self_shadow_floor;
   int self_shadow_lights = 0;
   if (self_shadow_ != nullptr && self_shadow_map_size_px_ > 0)
     self_shadow_lights = std::max(0, std::min({static_cast<int>(self_shadow_->size()),
                                                capabilities_.max_fragment_texture_units - units_used,
-                                               (capabilities_.max_fragment_uniform_vectors - 48) / 6}));
+                                               (capabilities_.max_fragment_uniform_vectors - 48 -
+                                                5 * self_shadow_floor) / 6}));
   self_shadow_lights_read_ = self_shadow_lights;
   const gles::Program* found =
-      programFor(piece, range.first, range.last, glossy_levels, self_shadow_lights, floor_shadow, floor_camera, error);
+      programFor(piece, range.first, range.last, glossy_levels, self_shadow_lights,
+                 self_shadow_lights > 0 ? self_shadow_floor : 0, floor_shadow, floor_camera, error);
   if (found == nullptr) return false;
   const gles::Program& program = *found;
   program.use();
@@ -566,35 +618,9 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
     glUniformMatrix3fv(program.uniform((prefix + "_uv_transform").c_str()), 1, GL_FALSE, glm::value_ptr(transform));
   }
   if (self_shadow_lights > 0) {
-    std::vector<GLint> units;
-    std::vector<glm::vec4> row0, row1, row2;
-    std::vector<glm::vec3> directions, rgb;
-    std::vector<glm::vec2> texels;
-    for (int i = 0; i < self_shadow_lights; ++i) {
-      const SelfShadowLight& light = (*self_shadow_)[static_cast<size_t>(i)];
-      glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
-      glBindTexture(GL_TEXTURE_2D, light.map);
-      units.push_back(unit++);
-      // uv = 0.5 clip.xy + 0.5 and depth01 = 0.5 clip.z + 0.5 (orthographic: w = 1).
-      const glm::mat4 m = light.clip_from_world;
-      auto row = [&](int r) { return glm::vec4(m[0][r], m[1][r], m[2][r], m[3][r]); };
-      const glm::vec4 half_w(0.0f, 0.0f, 0.0f, 0.5f);
-      row0.push_back(0.5f * row(0) + half_w);
-      row1.push_back(0.5f * row(1) + half_w);
-      row2.push_back(0.5f * row(2) + half_w);
-      directions.push_back(light.direction_w);
-      rgb.push_back(light.rgb);
-      const float texel_uv = 1.0f / static_cast<float>(self_shadow_map_size_px_);
-      texels.emplace_back(texel_uv, light.depth_range_m > 0.0f ? light.width_m * texel_uv / light.depth_range_m : 0.0f);
-    }
-    const GLsizei n = self_shadow_lights;
-    glUniform1iv(program.uniform("u_self_shadow_map"), n, units.data());
-    glUniform4fv(program.uniform("u_self_shadow_row0"), n, glm::value_ptr(row0[0]));
-    glUniform4fv(program.uniform("u_self_shadow_row1"), n, glm::value_ptr(row1[0]));
-    glUniform4fv(program.uniform("u_self_shadow_row2"), n, glm::value_ptr(row2[0]));
-    glUniform3fv(program.uniform("u_self_shadow_direction"), n, glm::value_ptr(directions[0]));
-    glUniform3fv(program.uniform("u_self_shadow_rgb"), n, glm::value_ptr(rgb[0]));
-    glUniform2fv(program.uniform("u_self_shadow_texel"), n, glm::value_ptr(texels[0]));
+    bindSelfShadowLights(program, "u_self_shadow", *self_shadow_, self_shadow_lights, unit);
+    if (self_shadow_floor > 0)
+      bindSelfShadowLights(program, "u_self_shadow_floor", *self_shadow_floor_, self_shadow_floor, unit);
   }
   if (near_floor_.enabled) {
     glUniform3fv(program.uniform("u_ball_centre_w"), 1, glm::value_ptr(glm::vec3(near_floor_.ball_centre_w)));

@@ -108,7 +108,11 @@ class ModelRenderer {
   // self_shadow_maps; strongest first), until set again; null or empty: none.
   // As many are read as the GPU's texture units and fragment uniforms allow
   // (selfShadowLightsRead says how many the last draw read).
-  void setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth);
+  // `floor`: GroundShadow::floorSelfShadows, for the floor's light the
+  // model hides from itself (null or empty: the floor's light is never
+  // hidden). They take their texture units before the weakest dome lights.
+  void setSelfShadow(const std::vector<SelfShadowLight>* lights, int map_size_px, bool packed_depth,
+                     const std::vector<SelfShadowLight>* floor = nullptr);
   int selfShadowLightsRead() const { return self_shadow_lights_read_; }
 
   // The floor beside the model in its reflections (ibl/near_floor.hpp):
@@ -165,7 +169,12 @@ class ModelRenderer {
                        std::string& error);
   const gles::Texture* textureFor(const model::MeshModel& model, const model::TextureSlot& slot, std::string& error);
   const gles::Program* programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
-                                  int self_shadow_lights, bool floor_shadow, bool floor_camera, std::string& error);
+                                  int self_shadow_lights, int self_shadow_floor, bool floor_shadow, bool floor_camera,
+                                  std::string& error);
+  // A set of self-shadow lights' maps and uniforms (`prefix`_map, _row0..2,
+  // _direction, _rgb, _texel), from texture unit `unit` on (advanced).
+  void bindSelfShadowLights(const gles::Program& program, const std::string& prefix,
+                            const std::vector<SelfShadowLight>& lights, int count, int& unit) const;
   bool drawPiece(const Piece& piece, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                  const ibl::SceneLighting& lighting, EnvironmentMaps& environment,
                  const std::vector<double>& rung_alphas, std::string& error);
@@ -180,6 +189,7 @@ class ModelRenderer {
   gles::Texture brdf_table_;
   int brdf_table_size_ = 0;
   const std::vector<SelfShadowLight>* self_shadow_ = nullptr;
+  const std::vector<SelfShadowLight>* self_shadow_floor_ = nullptr;
   int self_shadow_map_size_px_ = 0;
   bool self_shadow_packed_ = false;
   int self_shadow_lights_read_ = 0;

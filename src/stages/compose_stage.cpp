@@ -95,7 +95,7 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
     if (!shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error)) return Status::runtimeFailure(error);
     if (object_.isModel() && shadows.enabled())
       model_renderer_.setSelfShadow(&shadows.pass().selfShadowLights(), shadows.pass().shadowMapSizePx(),
-                                    shadows.pass().packedDepth());
+                                    shadows.pass().packedDepth(), &shadows.pass().floorSelfShadows());
     // A model reflects the floor beside it, with its own shadow there.
     if (object_.isModel()) {
       passes::ModelRenderer::NearFloor near_floor;

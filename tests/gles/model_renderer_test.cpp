@@ -391,7 +391,6 @@ TEST_F(GpuTest, NearFloorReflectionsMatchTheCpuReference) {
         shadowed += fractionAt(ground).r < 0.9f ? 1 : 0;
         for (int k = 0; k < 3; ++k) {
           const double expected = 255.0 * ibl::linearToSrgb(std::clamp(linear[k], 0.0f, 1.0f));
-          if (std::abs(result.row(y)[3 * x + k] - expected) > max_error) std::printf("DBG %d %d k%d gpu %d cpu %.1f frac %.3f ground %.4f %.4f r %.3f %.3f %.3f\n", x, y, k, result.row(y)[3*x+k], expected, fractionAt(ground).r, ground.x, ground.y, r.x, r.y, r.z);
           max_error = std::max(max_error, std::abs(result.row(y)[3 * x + k] - expected));
           max_error_without = std::max(
               max_error_without, std::abs(255.0 * ibl::linearToSrgb(std::clamp(without[k], 0.0f, 1.0f)) - expected));
@@ -514,9 +513,11 @@ TEST_F(GpuTest, ModelsBeyondSixteenBitIndicesDrawTheSameWhenSplit) {
 // Self-shadowing: a table (a 16 cm floor plate and an 8 cm roof 6 cm above
 // it, both facing up) under a uniform sky L and one dome light straight
 // above of irradiance C = 0.4 pi L. The floor under the roof loses that
-// light: its lit colour is scaled by 1 - C / (pi D) = 0.6 exactly
-// (D = L, the diffuse map of a uniform sky), and the floor outside the roof's
-// footprint and the roof itself keep all of it. Pixels within 3 map texels
+// light: its lit colour is scaled by 1 - C / (pi D) = 0.6 (D = L, the
+// diffuse map of a uniform sky), lifted by the light the table bounces
+// onto itself (ibl::multiBounceVisibility at its albedo, 0.8 + 0.04:
+// 0.88), and the floor outside the roof's footprint and the roof itself
+// keep all of it. Pixels within 3 map texels
 // (2 mm) of the footprint's edge are left out; elsewhere the budget is the
 // 8-bit output (1 level) on both renders. Both packed and depth-texture maps.
 TEST_F(GpuTest, AModelShadowsItselfFromTheDomeLights) {
@@ -581,7 +582,8 @@ TEST_F(GpuTest, AModelShadowsItselfFromTheDomeLights) {
     ASSERT_TRUE(renderModel(stage, renderer, shadowed, error)) << error;
     EXPECT_EQ(renderer.selfShadowLightsRead(), 1);
 
-    const double expected_visibility = 1.0 - 0.4;
+    const double expected_visibility = ibl::multiBounceVisibility(glm::vec3(1.0f - 0.4f), glm::vec3(0.84f)).r;
+    EXPECT_NEAR(expected_visibility, 0.882, 0.001);
     const double margin_m = 3.0 * (2.0 * caster.mesh_radius_m * 1.1) / shadow.shadowMapSizePx();
     const glm::dvec3 eye = stage.pose.cameraCenterWorld();
     int under = 0, outside = 0, roof = 0;
@@ -624,10 +626,147 @@ TEST_F(GpuTest, AModelShadowsItselfFromTheDomeLights) {
     EXPECT_GT(under, 500);
     EXPECT_GT(outside, 2000);
     EXPECT_GT(roof, 2000);
-    // One level for each 8-bit render, plus the unshadowed level's own rounding scaled by 0.6.
+    // One level for each 8-bit render, plus the unshadowed level's own rounding scaled by 0.88.
     EXPECT_LE(worst_under, 1.5) << packed;
     EXPECT_LE(worst_outside, 0.0) << packed << ": a lit surface shadows itself (acne)";
   }
+}
+
+// The floor's light, which no dome light carries, hidden where the model
+// stands between a point and the floor: an open box (an 8 cm floor plate
+// and four 4 cm walls, each a pair of faces 2 mm apart, inward and
+// outward) under a uniform world L, above and below, and one dome light
+// straight above that no wall faces. A wall's face receives half its light
+// from the floor, E_down (1 - n.z) / 2 = pi L / 2 of pi D = pi L. Inside,
+// the walls see the box's own floor below them: the floor's half is
+// hidden, visibility 0.5, lifted by the bounce (ibl::multiBounceVisibility
+// at 0.84); outside they see the real floor: all of it kept. Against the
+// same box drawn with the dome's self-shadow alone (the floor's light
+// never hidden), per pixel, faces 3 map texels from the box's edges and
+// corners left out.
+TEST_F(GpuTest, AModelHidesTheFloorsLightFromItself) {
+  const gles::Capabilities& caps = test::sharedCapabilities();
+  ModelStage stage;
+  stage.pose = test::lookAt({0.03, -0.24, 0.20}, {0.0, 0.0, 0.02});
+  ASSERT_NO_FATAL_FAILURE(initStage(stage, caps));
+  std::string error;
+  ibl::CubeMapRGB world(stage.maps.settings().reflection_face_size);
+  const glm::vec3 radiance(0.3f, 0.28f, 0.25f);
+  for (auto& face : world.faces) std::fill(face.begin(), face.end(), radiance);
+  ASSERT_TRUE(stage.maps.setReflection(world, error)) << error;
+  ASSERT_TRUE(stage.maps.updateDiffuse(error)) << error;
+  const auto diffuse = stage.maps.readDiffuse(error);
+  ASSERT_TRUE(diffuse) << error;
+
+  constexpr float kHalf = 0.04f, kHeight = 0.04f, kWall = 0.002f;
+  model::MeshModel box;
+  model::Primitive p;
+  auto quad = [&](const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, const glm::vec3& d, const glm::vec3& n) {
+    const auto base = static_cast<std::uint32_t>(p.positions_m.size());
+    p.positions_m.insert(p.positions_m.end(), {a, b, c, d});
+    p.normals.insert(p.normals.end(), 4, n);
+    // Wound counter-clockwise seen from n's side.
+    const bool ccw = glm::dot(glm::cross(b - a, c - a), n) > 0.0f;
+    if (ccw)
+      p.indices.insert(p.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    else
+      p.indices.insert(p.indices.end(), {base, base + 2, base + 1, base, base + 3, base + 2});
+  };
+  quad({-kHalf, -kHalf, 0}, {kHalf, -kHalf, 0}, {kHalf, kHalf, 0}, {-kHalf, kHalf, 0}, {0, 0, 1});
+  for (int side = 0; side < 4; ++side) {
+    const float angle = side * 0.5f * 3.14159265f;
+    const glm::vec3 out(std::cos(angle), std::sin(angle), 0.0f), along(-out.y, out.x, 0.0f);
+    for (const float offset : {kHalf - kWall, kHalf}) {
+      const glm::vec3 centre = offset * out;
+      const glm::vec3 n = offset < kHalf ? -out : out;
+      quad(centre - kHalf * along, centre + kHalf * along, centre + kHalf * along + glm::vec3(0, 0, kHeight),
+           centre - kHalf * along + glm::vec3(0, 0, kHeight), n);
+    }
+  }
+  p.material = 0;
+  box.primitives.push_back(p);
+  box.materials.emplace_back();
+  box.materials[0].metallic_factor = 0.0f;
+  box.materials[0].base_color_factor = {0.8f, 0.8f, 0.8f, 1.0f};
+  box.min_m = {-kHalf, -kHalf, 0.0f};
+  box.max_m = {kHalf, kHalf, kHeight};
+
+  ibl::ShadowCaster caster;
+  caster.shape = ibl::ShadowCaster::Shape::kMesh;
+  auto triangles = std::make_shared<std::vector<glm::vec3>>();
+  for (std::uint32_t index : p.indices) triangles->push_back(p.positions_m[index]);
+  caster.mesh_triangles_w = triangles;
+  caster.mesh_centre_w = {0.0, 0.0, 0.5 * kHeight};
+  caster.mesh_radius_m = glm::length(glm::dvec3(kHalf, kHalf, 0.5 * kHeight));
+  ibl::ShadowLight light;
+  light.direction_w = {0.0, 0.0, 1.0};
+  light.rgb = glm::dvec3(0.4 * 3.14159265358979 * glm::dvec3(radiance));
+  light.share_rgb = glm::dvec3(0.4);
+  light.cone_radius_rad = 0.01;
+  passes::GroundShadowSettings shadow_settings;
+  shadow_settings.self_shadow_maps = true;
+  passes::GroundShadow shadow;
+  ASSERT_TRUE(shadow.init(caps, shadow_settings, error)) << error;
+  ASSERT_TRUE(shadow.update({light}, caster, error)) << error;
+  ASSERT_EQ(shadow.floorSelfShadows().size(), static_cast<std::size_t>(passes::GroundShadow::kFloorLightCount));
+
+  passes::ModelRenderer renderer;
+  ASSERT_TRUE(renderer.init(caps, stage.maps.storage(), box, glm::dmat4(1.0), {}, error)) << error;
+  ImageRGB8 dome_only, with_floor;
+  renderer.setSelfShadow(&shadow.selfShadowLights(), shadow.shadowMapSizePx(), shadow.packedDepth());
+  ASSERT_TRUE(renderModel(stage, renderer, dome_only, error)) << error;
+  renderer.setSelfShadow(&shadow.selfShadowLights(), shadow.shadowMapSizePx(), shadow.packedDepth(),
+                         &shadow.floorSelfShadows());
+  ASSERT_TRUE(renderModel(stage, renderer, with_floor, error)) << error;
+
+  const double d_side = diffuse->sampleBilinear({0.0, -1.0, 0.0}).r, d_down = diffuse->sampleBilinear({0.0, 0.0, -1.0}).r;
+  const double inside_visibility =
+      ibl::multiBounceVisibility(glm::vec3(static_cast<float>(1.0 - 0.5 * d_down / d_side)), glm::vec3(0.84f)).r;
+  const double margin_m = 3.0 * (2.0 * caster.mesh_radius_m * 1.1) / shadow.shadowMapSizePx();
+  const glm::dvec3 eye = stage.pose.cameraCenterWorld();
+  int inner = 0, outer = 0;
+  double worst_inner = 0.0, worst_outer = 0.0;
+  for (int y = 0; y < with_floor.height; ++y)
+    for (int x = 0; x < with_floor.width; ++x) {
+      const glm::dvec3 ray = glm::normalize(glm::transpose(stage.pose.R_cam_from_world) *
+                                            ibl::pixelToCameraRay(stage.camera, {x, y}));
+      // The far wall's inner face (y = kHalf - kWall, facing -y) and the
+      // near wall's outer face (y = -kHalf, facing -y): the camera looks
+      // along +y at both.
+      if (!(ray.y > 0.0)) continue;
+      auto onPlaneY = [&](double plane_y) { return eye + ((plane_y - eye.y) / ray.y) * ray; };
+      const glm::dvec3 near_outer = onPlaneY(-kHalf), far_inner = onPlaneY(kHalf - kWall);
+      auto inFace = [&](const glm::dvec3& q) {
+        return std::abs(q.x) < kHalf - kWall - margin_m && q.z > margin_m && q.z < kHeight - margin_m;
+      };
+      double visibility = 0.0;
+      if (inFace(near_outer)) {
+        visibility = 1.0;
+        ++outer;
+      } else if (inFace(far_inner)) {
+        // Seen over the near wall, not through it.
+        const glm::dvec3 over_near = onPlaneY(-kHalf + kWall);
+        if (over_near.z < kHeight + margin_m) continue;
+        visibility = inside_visibility;
+        ++inner;
+      } else {
+        continue;
+      }
+      double& worst = visibility < 1.0 ? worst_inner : worst_outer;
+      for (int k = 0; k < 3; ++k) {
+        const double lit = ibl::srgbToLinear(dome_only.row(y)[3 * x + k] / 255.0);
+        const double expected = 255.0 * ibl::linearToSrgb(visibility * lit);
+        worst = std::max(worst, std::abs(with_floor.row(y)[3 * x + k] - expected));
+      }
+    }
+  std::printf("[ measure  ] floor's light: inner walls %d px (visibility %.3f), max error %.2f levels; outer walls %d px, "
+              "%.2f\n",
+              inner, inside_visibility, worst_inner, outer, worst_outer);
+  EXPECT_GT(inner, 300);
+  EXPECT_GT(outer, 300);
+  EXPECT_LT(inside_visibility, 0.9) << "the floor's share must show";
+  EXPECT_LE(worst_inner, 1.5);
+  EXPECT_LE(worst_outer, 0.0) << "a face that sees the floor lost its light";
 }
 
 TEST(ModelTextures, TextureTransformIsTranslationTimesRotationTimesScale) {
