@@ -56,6 +56,7 @@
 #include "model/generated_models.hpp"
 #include "model/mesh_model.hpp"
 #include "model/model_placement.hpp"
+#include "passes/camera_frame_texture.hpp"
 #include "passes/environment_maps.hpp"
 #include "passes/ground_shadow.hpp"
 #include "passes/model_renderer.hpp"
@@ -126,6 +127,7 @@ struct Setup {
   gles::RenderTarget target;
   passes::EnvironmentMaps maps;
   std::vector<ibl::ShadowLight> lights;  // the dome's, fitted to the environment
+  passes::CameraFrameTexture frame;      // a grey camera frame, for the floor the kiosk's model reflects
 };
 
 Setup& setup() {
@@ -139,8 +141,12 @@ Setup& setup() {
     s->capabilities = gles::probeCapabilities();
     std::string& error = s->gl_error;
     if (!s->target.init(s->camera.width_px, s->camera.height_px, error) ||
-        !s->maps.init(s->capabilities, {}, error))
+        !s->maps.init(s->capabilities, {}, error) || !s->frame.init(s->capabilities, error))
       return s;
+    ImageRGB8 grey;
+    grey.resize(s->camera.width_px, s->camera.height_px);
+    std::fill(grey.pixels.begin(), grey.pixels.end(), 110);
+    if (!s->frame.upload(grey, error)) return s;
     ibl::CubeMapRGB environment(s->maps.settings().reflection_face_size);
     for (int face = 0; face < ibl::kCubeFaceCount; ++face)
       for (int y = 0; y < environment.face_size; ++y)
@@ -405,7 +411,17 @@ bool ensureKioskAndShadow(ModelRig& rig) {
                        error) ||
       !rig.kiosk->prepareEdges(s.camera.width_px, s.camera.height_px, 0, error))
     return false;
-  rig.kiosk->setSelfShadow(&rig.shadow->selfShadowLights(), rig.shadow->shadowMapSizePx(), rig.shadow->packedDepth());
+  // As ComposeStage draws it: self-shadowed from the dome and the floor,
+  // reflecting the floor beside it (the default rig's ball).
+  rig.kiosk->setSelfShadow(&rig.shadow->selfShadowLights(), rig.shadow->shadowMapSizePx(), rig.shadow->packedDepth(),
+                           &rig.shadow->floorSelfShadows());
+  passes::ModelRenderer::NearFloor near_floor;
+  near_floor.enabled = true;
+  near_floor.ball_centre_w = RigGeometry{}.probe_center_w;
+  near_floor.ball_radius_m = RigGeometry{}.probe_radius_m;
+  near_floor.shadow = rig.shadow.get();
+  near_floor.camera_frame = &s.frame;
+  rig.kiosk->setNearFloor(near_floor);
   return true;
 }
 
@@ -571,7 +587,8 @@ void selfShadowRow(benchmark::State& state, const char* label, int rings) {
     state.SkipWithError(rig.error.c_str());
     return;
   }
-  rig.lit.setSelfShadow(&rig.shadow->selfShadowLights(), rig.shadow->shadowMapSizePx(), rig.shadow->packedDepth());
+  rig.lit.setSelfShadow(&rig.shadow->selfShadowLights(), rig.shadow->shadowMapSizePx(), rig.shadow->packedDepth(),
+                        &rig.shadow->floorSelfShadows());
   drawAgainstUnlit(state, std::string("model/self_shadow/tris:") + label, rig, rig.lit, *rig.unlit, 0);
   state.counters["self_shadow_lights"] = rig.lit.selfShadowLightsRead();
   rig.lit.setSelfShadow(nullptr, 0, false);  // the tris rows draw without

@@ -78,6 +78,10 @@ struct ModelStage {
   passes::ObjectCompositor compositor;
   std::optional<ibl::CubeMapRGB> diffuse, reflection;
   std::vector<ibl::CubeMapRGB> glossy_maps;
+  // As the CPU reference takes them: the glossy maps read back, and the
+  // ladder's rung alphas for the maps' glossy levels.
+  std::vector<const ibl::CubeMapRGB*> glossy;
+  std::vector<double> rung_alphas;
 };
 
 void initStage(ModelStage& stage, const gles::Capabilities& caps) {
@@ -104,6 +108,10 @@ void initStage(ModelStage& stage, const gles::Capabilities& caps) {
     ASSERT_TRUE(glossy) << error;
     stage.glossy_maps.push_back(*glossy);
   }
+  for (const auto& map : stage.glossy_maps) stage.glossy.push_back(&map);
+  const std::vector<double> exponents(stage.maps.settings().glossy_exponent.begin(),
+                                      stage.maps.settings().glossy_exponent.begin() + stage.maps.glossyLevels());
+  stage.rung_alphas = ibl::specularRungAlphas(exponents);
   ImageRGB8 grey;
   grey.resize(stage.camera.width_px, stage.camera.height_px);
   std::fill(grey.pixels.begin(), grey.pixels.end(), 90);
@@ -162,11 +170,8 @@ TEST_P(ModelShadingTest, MatchesCpuShadeMetallicRoughness) {
       force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
   ModelStage stage;
   ASSERT_NO_FATAL_FAILURE(initStage(stage, caps));
-  std::vector<const ibl::CubeMapRGB*> glossy;
-  for (const auto& map : stage.glossy_maps) glossy.push_back(&map);
-  std::vector<double> exponents(stage.maps.settings().glossy_exponent.begin(),
-                                stage.maps.settings().glossy_exponent.begin() + stage.maps.glossyLevels());
-  const std::vector<double> rung_alphas = ibl::specularRungAlphas(exponents);
+  const std::vector<const ibl::CubeMapRGB*>& glossy = stage.glossy;
+  const std::vector<double>& rung_alphas = stage.rung_alphas;
   const ibl::EnvironmentBrdfTable table;
 
   const ShadingCase cases[] = {
@@ -263,11 +268,8 @@ TEST_F(GpuTest, NearFloorReflectionsMatchTheCpuReference) {
   ModelStage stage;
   stage.camera.distortion = {};
   ASSERT_NO_FATAL_FAILURE(initStage(stage, caps));
-  std::vector<const ibl::CubeMapRGB*> glossy;
-  for (const auto& map : stage.glossy_maps) glossy.push_back(&map);
-  std::vector<double> exponents(stage.maps.settings().glossy_exponent.begin(),
-                                stage.maps.settings().glossy_exponent.begin() + stage.maps.glossyLevels());
-  const std::vector<double> rung_alphas = ibl::specularRungAlphas(exponents);
+  const std::vector<const ibl::CubeMapRGB*>& glossy = stage.glossy;
+  const std::vector<double>& rung_alphas = stage.rung_alphas;
   const ibl::EnvironmentBrdfTable table;
   std::string error;
 
@@ -510,6 +512,50 @@ TEST_F(GpuTest, ModelsBeyondSixteenBitIndicesDrawTheSameWhenSplit) {
   EXPECT_EQ(differing, 0);
 }
 
+// A one-primitive grey (0.8, dielectric) model of `p`, standing in the box
+// [-half, half]^2 x [0, height], and its triangles as the shadow caster.
+struct GreyMesh {
+  model::MeshModel model;
+  ibl::ShadowCaster caster;
+};
+GreyMesh greyMesh(model::Primitive p, float half_m, float height_m) {
+  GreyMesh mesh;
+  mesh.caster.shape = ibl::ShadowCaster::Shape::kMesh;
+  auto triangles = std::make_shared<std::vector<glm::vec3>>();
+  for (std::uint32_t index : p.indices) triangles->push_back(p.positions_m[index]);
+  mesh.caster.mesh_triangles_w = triangles;
+  mesh.caster.mesh_centre_w = {0.0, 0.0, 0.5 * height_m};
+  mesh.caster.mesh_radius_m = glm::length(glm::dvec3(half_m, half_m, 0.5 * height_m));
+  p.material = 0;
+  mesh.model.primitives.push_back(std::move(p));
+  mesh.model.materials.emplace_back();
+  mesh.model.materials[0].metallic_factor = 0.0f;
+  mesh.model.materials[0].base_color_factor = {0.8f, 0.8f, 0.8f, 1.0f};
+  mesh.model.min_m = {-half_m, -half_m, 0.0f};
+  mesh.model.max_m = {half_m, half_m, height_m};
+  return mesh;
+}
+
+// Maps of a world of uniform radiance (above the horizon and below), and
+// the diffuse map read back.
+constexpr glm::vec3 kUniformRadiance(0.3f, 0.28f, 0.25f);
+std::optional<ibl::CubeMapRGB> setUniformWorld(ModelStage& stage, std::string& error) {
+  ibl::CubeMapRGB world(stage.maps.settings().reflection_face_size);
+  for (auto& face : world.faces) std::fill(face.begin(), face.end(), kUniformRadiance);
+  if (!stage.maps.setReflection(world, error) || !stage.maps.updateDiffuse(error)) return std::nullopt;
+  return stage.maps.readDiffuse(error);
+}
+
+// One dome light straight above, of irradiance C = 0.4 pi L under a sky of radiance L.
+ibl::ShadowLight overheadLight(const glm::vec3& sky_radiance) {
+  ibl::ShadowLight light;
+  light.direction_w = {0.0, 0.0, 1.0};
+  light.rgb = glm::dvec3(0.4 * 3.14159265358979 * glm::dvec3(sky_radiance));
+  light.share_rgb = glm::dvec3(0.4);
+  light.cone_radius_rad = 0.01;
+  return light;
+}
+
 // Self-shadowing: a table (a 16 cm floor plate and an 8 cm roof 6 cm above
 // it, both facing up) under a uniform sky L and one dome light straight
 // above of irradiance C = 0.4 pi L. The floor under the roof loses that
@@ -527,16 +573,10 @@ TEST_F(GpuTest, AModelShadowsItselfFromTheDomeLights) {
     stage.pose = test::lookAt({0.02, -0.22, 0.26}, {0.0, 0.0, 0.0});
     ASSERT_NO_FATAL_FAILURE(initStage(stage, caps));
     std::string error;
-    ibl::CubeMapRGB sky(stage.maps.settings().reflection_face_size);
-    const glm::vec3 radiance(0.3f, 0.28f, 0.25f);
-    for (auto& face : sky.faces) std::fill(face.begin(), face.end(), radiance);
-    ASSERT_TRUE(stage.maps.setReflection(sky, error)) << error;
-    ASSERT_TRUE(stage.maps.updateDiffuse(error)) << error;
-    const auto diffuse = stage.maps.readDiffuse(error);
+    const auto diffuse = setUniformWorld(stage, error);
     ASSERT_TRUE(diffuse) << error;
     const glm::vec3 d_up = diffuse->sampleBilinear({0.0, 0.0, 1.0});
 
-    model::MeshModel table;
     model::Primitive p;
     const float floor_half = 0.08f, roof_half = 0.04f, roof_z = 0.06f;
     for (const auto& [half, z] : {std::pair{floor_half, 0.0f}, {roof_half, roof_z}}) {
@@ -545,26 +585,10 @@ TEST_F(GpuTest, AModelShadowsItselfFromTheDomeLights) {
       p.normals.insert(p.normals.end(), 4, glm::vec3(0, 0, 1));
       p.indices.insert(p.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
     }
-    p.material = 0;
-    table.primitives.push_back(p);
-    table.materials.emplace_back();
-    table.materials[0].metallic_factor = 0.0f;
-    table.materials[0].base_color_factor = {0.8f, 0.8f, 0.8f, 1.0f};
-    table.min_m = {-floor_half, -floor_half, 0.0f};
-    table.max_m = {floor_half, floor_half, roof_z};
-
-    ibl::ShadowCaster caster;
-    caster.shape = ibl::ShadowCaster::Shape::kMesh;
-    auto triangles = std::make_shared<std::vector<glm::vec3>>();
-    for (std::uint32_t index : p.indices) triangles->push_back(p.positions_m[index]);
-    caster.mesh_triangles_w = triangles;
-    caster.mesh_centre_w = {0.0, 0.0, 0.5 * roof_z};
-    caster.mesh_radius_m = glm::length(glm::dvec3(floor_half, floor_half, 0.5 * roof_z));
-    ibl::ShadowLight light;
-    light.direction_w = {0.0, 0.0, 1.0};
-    light.rgb = glm::dvec3(0.4 * 3.14159265358979 * glm::dvec3(d_up));
-    light.share_rgb = glm::dvec3(0.4);
-    light.cone_radius_rad = 0.01;
+    const GreyMesh mesh = greyMesh(p, floor_half, roof_z);
+    const model::MeshModel& table = mesh.model;
+    const ibl::ShadowCaster& caster = mesh.caster;
+    const ibl::ShadowLight light = overheadLight(d_up);
     passes::GroundShadowSettings shadow_settings;
     shadow_settings.self_shadow_maps = true;
     shadow_settings.force_packed_depth = packed;
@@ -650,16 +674,10 @@ TEST_F(GpuTest, AModelHidesTheFloorsLightFromItself) {
   stage.pose = test::lookAt({0.03, -0.24, 0.20}, {0.0, 0.0, 0.02});
   ASSERT_NO_FATAL_FAILURE(initStage(stage, caps));
   std::string error;
-  ibl::CubeMapRGB world(stage.maps.settings().reflection_face_size);
-  const glm::vec3 radiance(0.3f, 0.28f, 0.25f);
-  for (auto& face : world.faces) std::fill(face.begin(), face.end(), radiance);
-  ASSERT_TRUE(stage.maps.setReflection(world, error)) << error;
-  ASSERT_TRUE(stage.maps.updateDiffuse(error)) << error;
-  const auto diffuse = stage.maps.readDiffuse(error);
+  const auto diffuse = setUniformWorld(stage, error);
   ASSERT_TRUE(diffuse) << error;
 
   constexpr float kHalf = 0.04f, kHeight = 0.04f, kWall = 0.002f;
-  model::MeshModel box;
   model::Primitive p;
   auto quad = [&](const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, const glm::vec3& d, const glm::vec3& n) {
     const auto base = static_cast<std::uint32_t>(p.positions_m.size());
@@ -683,26 +701,10 @@ TEST_F(GpuTest, AModelHidesTheFloorsLightFromItself) {
            centre - kHalf * along + glm::vec3(0, 0, kHeight), n);
     }
   }
-  p.material = 0;
-  box.primitives.push_back(p);
-  box.materials.emplace_back();
-  box.materials[0].metallic_factor = 0.0f;
-  box.materials[0].base_color_factor = {0.8f, 0.8f, 0.8f, 1.0f};
-  box.min_m = {-kHalf, -kHalf, 0.0f};
-  box.max_m = {kHalf, kHalf, kHeight};
-
-  ibl::ShadowCaster caster;
-  caster.shape = ibl::ShadowCaster::Shape::kMesh;
-  auto triangles = std::make_shared<std::vector<glm::vec3>>();
-  for (std::uint32_t index : p.indices) triangles->push_back(p.positions_m[index]);
-  caster.mesh_triangles_w = triangles;
-  caster.mesh_centre_w = {0.0, 0.0, 0.5 * kHeight};
-  caster.mesh_radius_m = glm::length(glm::dvec3(kHalf, kHalf, 0.5 * kHeight));
-  ibl::ShadowLight light;
-  light.direction_w = {0.0, 0.0, 1.0};
-  light.rgb = glm::dvec3(0.4 * 3.14159265358979 * glm::dvec3(radiance));
-  light.share_rgb = glm::dvec3(0.4);
-  light.cone_radius_rad = 0.01;
+  const GreyMesh mesh = greyMesh(p, kHalf, kHeight);
+  const model::MeshModel& box = mesh.model;
+  const ibl::ShadowCaster& caster = mesh.caster;
+  const ibl::ShadowLight light = overheadLight(kUniformRadiance);
   passes::GroundShadowSettings shadow_settings;
   shadow_settings.self_shadow_maps = true;
   passes::GroundShadow shadow;

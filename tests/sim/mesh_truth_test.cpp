@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <vector>
@@ -160,6 +161,150 @@ TEST(MeshTruth, TheTopOfABoxShowsTheSkyIntegratedThroughItsBrdf) {
     // 1% (uniform sky) to ~1.5% (a sun found by 1% of the sky samples'
     // floor and the BRDF's); half an 8-bit code is 0.4% at these levels.
     EXPECT_LT(relative, 0.03) << c.environment;
+  }
+}
+
+// A shadow ray asks only whether the mesh is met: the BVH's any-hit
+// traversal must say so exactly when the closest-hit one finds a hit, for
+// rays from all around and through a model of many triangles, and through
+// MASK holes (where it falls back to the closest-hit walk).
+TEST(MeshTruth, ShadowRaysAgreeWithClosestHits) {
+  model::Material grey;
+  auto sphere = std::make_shared<const model::MeshModel>(model::sphereModel(0.03, 24, grey));
+  glm::dmat4 world_from_model(1.0);
+  world_from_model[3] = glm::dvec4(0.0, 0.0, 0.03, 1.0);
+  const VirtualOccluder mesh = meshOccluder(sphere, world_from_model);
+  ASSERT_FALSE(mesh.has_mask_material);
+  std::uint64_t state = 12345;
+  auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  };
+  int hits = 0, misses = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const glm::dvec3 origin(0.1 * (2 * uniform() - 1), 0.1 * (2 * uniform() - 1), 0.08 * uniform());
+    const glm::dvec3 dir = glm::normalize(glm::dvec3(0.0, 0.0, 0.03) - origin +
+                                          0.04 * glm::dvec3(2 * uniform() - 1, 2 * uniform() - 1, 2 * uniform() - 1));
+    const bool closest = intersectMesh(mesh, origin, dir, std::numeric_limits<double>::infinity()).has_value();
+    ASSERT_EQ(occluderBlocks(mesh, origin, dir), closest) << i;
+    (closest ? hits : misses) += 1;
+    // A limit short of the hit is no hit.
+    if (closest) {
+      const double t = intersectMesh(mesh, origin, dir, std::numeric_limits<double>::infinity())->t;
+      EXPECT_FALSE(occluderBlocks(mesh, origin, dir, 0.5 * t)) << i;
+    }
+  }
+  EXPECT_GT(hits, 500);
+  EXPECT_GT(misses, 500);
+}
+
+// A window renders its pixels as the whole frame does, and nothing else;
+// with occluders_only the model's own pixels are still the same bytes
+// (the floor around them black), at a fraction of the cost.
+TEST(MeshTruth, AWindowRendersItsPixelsAsTheWholeFrameDoes) {
+  SceneConfig scene = defaultScene();
+  scene.camera_path.name = "static";
+  scene.noise_sigma_code = 0.0;
+  const World world(scene);
+  model::Material material;
+  material.base_color_factor = glm::vec4(0.5f, 0.4f, 0.3f, 1.0f);
+  material.metallic_factor = 1.0f;
+  material.roughness_factor = 0.4f;
+  VirtualOccluder box = boxMesh({0.04, 0.04, 0.03}, {-0.10, 0.06}, 20.0, material);
+  box.path_samples = 8;
+  ImageRGB8 whole, windowed, only;
+  FrameTruth truth;
+  const auto start = std::chrono::steady_clock::now();
+  world.renderWithOccluders(0, {box}, whole, truth);
+  const double whole_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const glm::dvec2 at = projectWorldPoints(scene.camera, world.pose(0), {glm::dvec3(-0.10, 0.06, 0.015)})[0];
+  World::PixelWindow window{static_cast<int>(at.x) - 30, static_cast<int>(at.y) - 30, static_cast<int>(at.x) + 30,
+                            static_cast<int>(at.y) + 30, false};
+  world.renderWithOccluders(0, {box}, windowed, truth, &window);
+  window.occluders_only = true;
+  const auto only_start = std::chrono::steady_clock::now();
+  world.renderWithOccluders(0, {box}, only, truth, &window);
+  const double only_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - only_start).count();
+  const std::vector<float> floor_coverage = world.coverage(0, SceneObject::kFloor);
+  int inside_differing = 0, outside_lit = 0, model_pixels = 0, model_differing = 0;
+  for (int y = 0; y < whole.height; ++y)
+    for (int x = 0; x < whole.width; ++x) {
+      const bool in = x >= window.x_begin && x < window.x_end && y >= window.y_begin && y < window.y_end;
+      for (int c = 0; c < 3; ++c) {
+        const int k = 3 * x + c;
+        if (in)
+          inside_differing += windowed.row(y)[k] != whole.row(y)[k];
+        else
+          outside_lit += windowed.row(y)[k] != 0 || only.row(y)[k] != 0;
+      }
+      if (!in) continue;
+      // The model's pixels: where the windowed frame differs from the plain
+      // floor (the box hides it), and the occluders-only frame lit them.
+      bool lit = false;
+      for (int c = 0; c < 3; ++c) lit = lit || only.row(y)[3 * x + c] != 0;
+      if (lit && floor_coverage[static_cast<size_t>(y) * whole.width + x] == 1.0f) {
+        // A pixel the occluders-only frame lit, which the floor's coverage
+        // (without the box) calls all floor: the box covers it, at least partly.
+        ++model_pixels;
+        bool same = true;
+        for (int c = 0; c < 3; ++c) same = same && only.row(y)[3 * x + c] == whole.row(y)[3 * x + c];
+        model_differing += same ? 0 : 1;
+      }
+    }
+  std::printf("window 60x60: %d bytes differ from the whole frame, %d lit outside; occluders only: %d model pixels, "
+              "%d differ (edges); whole %.2f s, occluders only %.2f s\n",
+              inside_differing, outside_lit, model_pixels, model_differing, whole_s, only_s);
+  EXPECT_EQ(inside_differing, 0);
+  EXPECT_EQ(outside_lit, 0);
+  EXPECT_GT(model_pixels, 500);
+  // Only the outline's pixels may differ: they hold the floor's share in the whole frame.
+  EXPECT_LT(model_differing, model_pixels / 4);
+  EXPECT_LT(only_s, whole_s);
+}
+
+// Lit by what the 8-bit camera can know: where nothing in the ball's view
+// clips (overcast), that is the full HDR world, byte for byte; in the sun
+// it is less (the sun clips), and the per-pixel clip leaves the sun's pixel
+// its clipped value, so a sunlit metal box's top is darker than the HDR
+// truth's but not black.
+TEST(MeshTruth, TheEightBitKnowableSkyIsTheHdrSkyWhereNothingClips) {
+  model::Material material;
+  material.base_color_factor = glm::vec4(0.6f, 0.6f, 0.6f, 1.0f);
+  material.metallic_factor = 0.0f;
+  material.roughness_factor = 0.7f;
+  for (const char* environment : {"overcast", "sun_sky"}) {
+    SceneConfig scene = defaultScene();
+    scene.environment = environment;
+    scene.camera_path.name = "static";
+    scene.noise_sigma_code = 0.0;
+    const World world(scene);
+    VirtualOccluder box = boxMesh({0.05, 0.05, 0.03}, {-0.10, 0.06}, 0.0, material);
+    box.path_samples = 16;
+    const glm::dvec2 top = projectWorldPoints(scene.camera, world.pose(0), {glm::dvec3(-0.10, 0.06, 0.03)})[0];
+    const World::PixelWindow window{static_cast<int>(top.x) - 6, static_cast<int>(top.y) - 6,
+                                    static_cast<int>(top.x) + 7, static_cast<int>(top.y) + 7, true};
+    ImageRGB8 hdr, knowable;
+    FrameTruth truth;
+    world.renderWithOccluders(0, {box}, hdr, truth, &window);
+    box.clipped_lighting = true;
+    world.renderWithOccluders(0, {box}, knowable, truth, &window);
+    double sum_hdr = 0.0, sum_knowable = 0.0;
+    int differing = 0;
+    for (int y = window.y_begin; y < window.y_end; ++y)
+      for (int x = window.x_begin; x < window.x_end; ++x)
+        for (int c = 0; c < 3; ++c) {
+          sum_hdr += testing::pixelLinear(hdr, x, y, c);
+          sum_knowable += testing::pixelLinear(knowable, x, y, c);
+          differing += hdr.row(y)[3 * x + c] != knowable.row(y)[3 * x + c];
+        }
+    std::printf("%s: the box's top, knowable / HDR = %.3f, %d bytes differ\n", environment, sum_knowable / sum_hdr,
+                differing);
+    if (std::string(environment) == "overcast") {
+      EXPECT_EQ(differing, 0);
+    } else {
+      EXPECT_LT(sum_knowable, 0.8 * sum_hdr);
+      EXPECT_GT(sum_knowable, 0.1 * sum_hdr);
+    }
   }
 }
 
