@@ -142,11 +142,15 @@ uniform float u_floor_distortion_k3;
 uniform vec2 u_floor_focal_px;
 uniform vec2 u_floor_principal_px;
 uniform vec2 u_floor_image_size_px;
+uniform float u_floor_reach2;  // ibl::cameraFloorReach2
 
 vec4 cameraFloor(vec2 ground) {
   vec3 p = u_floor_rotation_cam_from_world * vec3(ground, 0.0) + u_floor_translation_cam_from_world;
   if (p.z <= 1e-3) return vec4(0.0);
-  vec2 pixel = u_floor_focal_px * distortNormalized(p.xy / p.z, u_floor_distortion, u_floor_distortion_k3) +
+  vec2 normalized = p.xy / p.z;
+  // Past the lens's calibrated range (and before a 16-bit float overflows).
+  if (dot(normalized, normalized) > u_floor_reach2) return vec4(0.0);
+  vec2 pixel = u_floor_focal_px * distortNormalized(normalized, u_floor_distortion, u_floor_distortion_k3) +
                u_floor_principal_px;
   vec2 inside = min(pixel + 0.5, u_floor_image_size_px - 0.5 - pixel);
   float weight = clamp(min(inside.x, inside.y) / CAMERA_FLOOR_MARGIN_PX, 0.0, 1.0);

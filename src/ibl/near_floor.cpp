@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "ibl/camera_projection.hpp"
+
 namespace probelight::ibl {
 
 NearFloorLookup nearFloorLookup(const glm::vec3& point_w, const glm::vec3& direction_w, const NearFloorBall& ball) {
@@ -38,6 +40,17 @@ float cameraFloorWeight(const glm::vec2& pixel, int width_px, int height_px) {
   const float inside_px = std::min(std::min(pixel.x + 0.5f, static_cast<float>(width_px) - 0.5f - pixel.x),
                                    std::min(pixel.y + 0.5f, static_cast<float>(height_px) - 0.5f - pixel.y));
   return std::clamp(inside_px / kCameraFloorMarginPx, 0.0f, 1.0f);
+}
+
+double cameraFloorReach2(const CameraIntrinsics& camera) {
+  double reach2 = 0.0;
+  for (const glm::dvec2 pixel : {glm::dvec2(-0.5, -0.5), glm::dvec2(camera.width_px - 0.5, -0.5),
+                                 glm::dvec2(-0.5, camera.height_px - 0.5),
+                                 glm::dvec2(camera.width_px - 0.5, camera.height_px - 0.5)}) {
+    const glm::dvec3 ray = pixelToCameraRay(camera, pixel);
+    reach2 = std::max(reach2, ray.x * ray.x + ray.y * ray.y);
+  }
+  return 2.25 * reach2;
 }
 
 }  // namespace probelight::ibl

@@ -39,6 +39,8 @@
 
 #include <glm/glm.hpp>
 
+#include "core/types.hpp"
+
 namespace probelight::ibl {
 
 // Ground points further than this along the ray are as good as the
@@ -73,5 +75,12 @@ NearFloorLookup nearFloorLookup(const glm::vec3& point_w, const glm::vec3& direc
 // edge, falling linearly to 0 at the edge, 0 outside.
 constexpr float kCameraFloorMarginPx = 8.0f;
 float cameraFloorWeight(const glm::vec2& pixel, int width_px, int height_px);
+
+// How far from the axis (x^2 + y^2 of a point's undistorted (x/z, y/z)) a
+// ground point may lie for the frame to be read there: 1.5 times the
+// frame's own reach in each direction (its corners' rays). Further out the
+// distortion polynomial is past its calibrated range and can fold a point
+// far outside the frame back into it.
+double cameraFloorReach2(const CameraIntrinsics& camera);
 
 }  // namespace probelight::ibl

@@ -649,6 +649,7 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
                   static_cast<float>(camera.cy_px));
       glUniform2f(program.uniform("u_floor_image_size_px"), static_cast<float>(camera.width_px),
                   static_cast<float>(camera.height_px));
+      glUniform1f(program.uniform("u_floor_reach2"), static_cast<float>(ibl::cameraFloorReach2(camera)));
       if (near_floor_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma)
         glUniform1f(program.uniform("u_camera_gamma"), static_cast<float>(near_floor_.camera_transfer.gamma));
     }

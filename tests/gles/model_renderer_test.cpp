@@ -314,7 +314,8 @@ TEST_F(GpuTest, NearFloorReflectionsMatchTheCpuReference) {
   ASSERT_TRUE(stage.frame.upload(ramp, error)) << error;
   auto cameraFloorAt = [&](const glm::vec3& ground_w) {
     const glm::dvec3 p = stage.pose.toCamera(glm::dvec3(ground_w));
-    if (!(p.z > 1e-3)) return glm::vec4(0.0f);
+    if (!(p.z > 1e-3) || (p.x * p.x + p.y * p.y) / (p.z * p.z) > ibl::cameraFloorReach2(stage.camera))
+      return glm::vec4(0.0f);
     const glm::dvec2 pixel = ibl::projectToPixel(stage.camera, p);
     const float weight = ibl::cameraFloorWeight(glm::vec2(pixel), ramp.width, ramp.height);
     const double fx = std::clamp(pixel.x, 0.0, ramp.width - 1.0), fy = std::clamp(pixel.y, 0.0, ramp.height - 1.0);

@@ -99,6 +99,29 @@ TEST(NearFloor, AtTheHorizonTheLookupTendsToTheRaysOwnDirection) {
   EXPECT_LE(glm::length(far.ground_point_w - p), kNearFloorMaxDistance_m + 1e-3f);
 }
 
+// The frame is trusted fully from 8 px inside its edge, linearly less to
+// nothing at the edge and beyond; and only within 1.5 times its own reach
+// from the axis, where the distortion still maps points in order.
+TEST(NearFloor, TheCameraFrameIsReadWellInsideItsEdgeAndItsLens) {
+  EXPECT_EQ(cameraFloorWeight({320.0f, 240.0f}, 640, 480), 1.0f);
+  EXPECT_EQ(cameraFloorWeight({7.5f, 240.0f}, 640, 480), 1.0f);
+  EXPECT_NEAR(cameraFloorWeight({3.5f, 240.0f}, 640, 480), 0.5f, 1e-6f);
+  EXPECT_NEAR(cameraFloorWeight({320.0f, 479.0f - 3.5f}, 640, 480), 0.5f, 1e-6f);
+  EXPECT_EQ(cameraFloorWeight({-0.5f, 240.0f}, 640, 480), 0.0f);
+  EXPECT_EQ(cameraFloorWeight({700.0f, 240.0f}, 640, 480), 0.0f);
+  CameraIntrinsics camera;
+  camera.width_px = 640;
+  camera.height_px = 480;
+  camera.fx_px = camera.fy_px = 525.0;
+  camera.cx_px = 319.5;
+  camera.cy_px = 239.5;
+  // A pinhole: the corners at (320 / 525, 240 / 525), |.|^2 = 0.5805.
+  EXPECT_NEAR(cameraFloorReach2(camera), 2.25 * (320.0 * 320.0 + 240.0 * 240.0) / (525.0 * 525.0), 1e-9);
+  // A barrel lens reaches further for the same corners.
+  camera.distortion = {-0.28, 0.07, 0.0, 0.0, 0.0};
+  EXPECT_GT(cameraFloorReach2(camera), 2.25 * (320.0 * 320.0 + 240.0 * 240.0) / (525.0 * 525.0));
+}
+
 // In the shading: a metal's downward reflection is read in the corrected
 // direction and darkened by the shadow's fraction there; an upward one is
 // untouched by either.
