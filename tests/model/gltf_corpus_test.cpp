@@ -220,5 +220,29 @@ TEST(GltfCorpus, RecursiveNodesLoadWithTheCycleCut) {
   EXPECT_TRUE(said_empty);
 }
 
+// The sample the package installs (board/models, scripts/make-sample-model.py):
+// it loads without a warning, as the model the README shows: its triangles,
+// two textures (base colour and metallic-roughness, 256 px), a glossy glaze
+// and a bare foot, 12 cm across, standing on its foot (glTF's Y up, the
+// loader's Z up: the lowest point at z = 0).
+TEST(GltfCorpus, TheShippedSampleBowlLoadsClean) {
+  const std::string path = std::string(PROBELIGHT_TEST_DATA_DIR) + "/../../board/models/ceramic-bowl.glb";
+  MeshModel model;
+  std::string error;
+  ASSERT_TRUE(loadGltfModel(path, {}, model, error)) << error;
+  EXPECT_TRUE(model.warnings.empty()) << model.warnings.front();
+  EXPECT_EQ(model.triangleCount(), 6656u);
+  ASSERT_EQ(model.images.size(), 2u);
+  for (const TextureImage& image : model.images) {
+    EXPECT_EQ(image.width, 256);
+    EXPECT_EQ(image.rgba.size(), static_cast<std::size_t>(image.width) * image.height * 4);
+  }
+  ASSERT_EQ(model.materials.size(), 1u);
+  EXPECT_GE(model.materials[0].base_color.image, 0);
+  EXPECT_GE(model.materials[0].metallic_roughness.image, 0);
+  EXPECT_NEAR(model.max_m.x - model.min_m.x, 0.12f, 0.005f);
+  EXPECT_NEAR(model.min_m.z, 0.0f, 1e-4f);
+}
+
 }  // namespace
 }  // namespace probelight::model
