@@ -7,6 +7,7 @@
 #include <regex>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 namespace probelight::config {
 
@@ -205,12 +206,56 @@ std::optional<std::string> textOpenCvWouldMisreadProblem(const std::string& text
   return std::nullopt;
 }
 
+// OpenCV's parser loops forever on a line that starts with '-' (but not
+// "---") after a "..." end-of-document line (found by
+// fuzz/probelight_yaml_fuzzer.cpp), and reads only the first of several
+// documents, silently. Every probelight file is one document: after "..."
+// only blank lines and comments may follow, and a "---" may only open the
+// file. Empty when all is well, else the problem with its line number.
+std::optional<std::string> secondDocumentProblem(const std::string& text) {
+  auto isMarker = [](std::string_view line, std::string_view marker) {
+    return line.substr(0, 3) == marker && (line.size() == 3 || line[3] == ' ' || line[3] == '\t' || line[3] == '#');
+  };
+  bool content_seen = false;
+  int line_number = 0, document_end_line = 0;
+  for (std::size_t from = 0; from <= text.size();) {
+    std::size_t to = text.find('\n', from);
+    if (to == std::string::npos) to = text.size();
+    std::string_view line(text.data() + from, to - from);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    ++line_number;
+    from = to + 1;
+    const std::size_t first = line.find_first_not_of(" \t");
+    const bool blank = first == std::string_view::npos || line[first] == '#';
+    if (document_end_line != 0) {
+      if (!blank)
+        return "line " + std::to_string(line_number) + ": more after the end of the document ('...' at line " +
+               std::to_string(document_end_line) + "); probelight reads one YAML document a file";
+      continue;
+    }
+    if (isMarker(line, "...")) {
+      document_end_line = line_number;
+    } else if (isMarker(line, "---")) {
+      if (content_seen)
+        return "line " + std::to_string(line_number) +
+               ": a second YAML document begins ('---'); probelight reads one YAML document a file";
+      const std::size_t rest = line.find_first_not_of(" \t", 3);
+      content_seen = rest != std::string_view::npos && line[rest] != '#';
+    } else if (!blank && line[0] != '%') {
+      content_seen = true;
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 ConfigReader ConfigReader::fromText(const std::string& yaml_text, const std::string& display_name) {
   if (yaml_text.find_first_not_of(" \t\r\n") == std::string::npos) throw ConfigError(display_name + ": file is empty");
   if (const std::optional<std::string> problem = textOpenCvWouldMisreadProblem(yaml_text))
     throw ConfigError(display_name + ": " + *problem + "; probelight's files are a few levels deep");
+  if (const std::optional<std::string> problem = secondDocumentProblem(yaml_text))
+    throw ConfigError(display_name + ": " + *problem);
   // OpenCV refuses YAML without its "%YAML:1.0" first line; people writing
   // rig.yaml by hand should not have to know that.
   int header_lines_added = 0;

@@ -483,6 +483,26 @@ TEST(ConfigReader, TooDeepNestingOrATooLargeFileIsOneLineNotACrash) {
                     "deep65.yaml", "", "nested deeper than 64");
 }
 
+// OpenCV's parser looped forever on a '-' line after a "..." end of
+// document (libFuzzer found it in CI: a 10 s timeout), and it reads only the
+// first of several documents without a word. Each is now one line naming the
+// file and the line; a leading "---", a closing "..." and comments after it
+// still read.
+TEST(ConfigReader, ASecondDocumentOrTextAfterTheEndIsOneLineNotAHang) {
+  TempFolder folder;
+  const std::string hang = folder.write("hang.yaml", "%YAML:1.0\ntag_id: 7\n...\n-\n");
+  expectConfigError([&] { config::loadRigFile(hang); }, hang, "", "line 4: more after the end of the document ('...' at line 3)");
+  const std::string second = folder.write("second.yaml", "---\ntag_id: 7\n---\ntag_id: 8\n");
+  expectConfigError([&] { config::loadRigFile(second); }, second, "", "line 3: a second YAML document begins");
+  const std::string after_end = folder.write("after_end.yaml", "tag_id: 7\n...\r\n---\ntag_id: 8\n");
+  expectConfigError([&] { config::loadRigFile(after_end); }, after_end, "", "line 3: more after the end");
+  ConfigReader ok = ConfigReader::fromText("%YAML:1.0\n--- # settings\n# a comment\na: 1\nb: '...'\n...\n\n  # done\n", "ok.yaml");
+  EXPECT_EQ(ok.readInt("a"), 1);
+  EXPECT_EQ(ok.readString("b", ""), "...");
+  ConfigReader inline_document = ConfigReader::fromText("--- {a: 2}\n", "inline.yaml");
+  EXPECT_EQ(inline_document.readInt("a"), 2);
+}
+
 // OpenCV read these silently as other numbers (issue 15, D2, D3): now each
 // is one line naming the file, the line and the literal.
 TEST(ConfigReader, IntegersThatOpenCvWouldWrapOrReadAsOctalAreRefused) {
