@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "capture/camera_format_choice.hpp"
 #include "config/config_reader.hpp"
 #include "tracking/tag_detector.hpp"
 
@@ -179,7 +180,7 @@ AppSettings loadAppSettings(const std::string& path) {
   ConfigReader camera_section = file.section("camera");
   settings.camera.id = camera_section.readString("id", settings.camera.id);
   settings.camera.pixel_format =
-      camera_section.readString("pixel_format", settings.camera.pixel_format, {"yuv420", "nv12"});
+      camera_section.readString("pixel_format", settings.camera.pixel_format, cameraFormatConfigNames());
   settings.camera.lock_exposure = camera_section.readBool("lock_exposure", settings.camera.lock_exposure);
   settings.camera.exposure_settle_frames =
       camera_section.readInt("exposure_settle_frames", settings.camera.exposure_settle_frames, Range::closed(0, 10000));
@@ -217,7 +218,11 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.lamp_on_frame = sim.readInt("lamp_on_frame", settings.sim.lamp_on_frame, Range::atLeast(-1));
   settings.sim.lamp_off_frame = sim.readInt("lamp_off_frame", settings.sim.lamp_off_frame, Range::atLeast(-1));
   settings.sim.ball_offset_m = sim.readVec3("ball_offset", settings.sim.ball_offset_m, Range::closed(-0.1, 0.1));
-  settings.sim.pixel_format = sim.readString("pixel_format", settings.sim.pixel_format, {"rgb", "yuv420", "nv12"});
+  // Every camera format but MJPEG, whose decoding is the libcamera source's.
+  std::vector<std::string> sim_formats = {"rgb"};
+  for (const CameraFormatInfo& format : cameraFormats())
+    if (format.format != CameraFormat::kMjpeg) sim_formats.push_back(format.config_name);
+  settings.sim.pixel_format = sim.readString("pixel_format", settings.sim.pixel_format, sim_formats);
   settings.sim.camera_lost_at_frame =
       sim.readInt("camera_lost_at_frame", settings.sim.camera_lost_at_frame, Range::atLeast(-1));
   settings.sim.camera_lost_restarts =
@@ -225,6 +230,7 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.min_exposure_us =
       sim.readDouble("min_exposure_us", settings.sim.min_exposure_us, Range::closed(0.0, 1e6));
   settings.sim.min_exposure_reported = sim.readBool("min_exposure_reported", settings.sim.min_exposure_reported);
+  settings.sim.exposure_control = sim.readBool("exposure_control", settings.sim.exposure_control);
   settings.sim.exposure_stops = sim.readDouble("exposure_stops", settings.sim.exposure_stops, Range::closed(-16.0, 16.0));
   settings.sim.camera_buffers = sim.readInt("camera_buffers", settings.sim.camera_buffers, Range::closed(2, 16));
   sim.rejectUnknownFields();

@@ -26,9 +26,11 @@ struct SimConfig {
   // Where the simulated ball really sits relative to rig.yaml's probe_center
   // (metres, W): a rig measured wrong, for testing probe_refinement.
   glm::dvec3 ball_offset_m{0.0};
-  // "rgb", or "yuv420" / "nv12": frames come as the board's camera gives
-  // them (full-range Rec601), so the Y'-plane detection and the GPU YUV
-  // conversion run as on the board.
+  // "rgb", or a camera's format: "yuv420", "nv12" (a Pi's camera), "yuyv"
+  // (a USB webcam), "rgb888", "bgr888", "xrgb8888" (vimc and other
+  // RGB sensors' pipelines). Frames then come as such a camera gives them
+  // (YUV full-range Rec601), so the detection's luma and the GPU's
+  // conversion of that format run as on the board. MJPEG is not simulated.
   std::string pixel_format = "rgb";
   // The camera disappearing mid-run (for testing the reconnect): frame N
   // fails, then the first `camera_lost_restarts` reconnects fail too.
@@ -41,6 +43,9 @@ struct SimConfig {
   // ExposureTime control has a minimum; a source may not tell it), so that
   // a bracket plans its ladder to it rather than finding it.
   bool min_exposure_reported = true;
+  // false: the simulated camera has no exposure control (as vimc's sensor
+  // has none): brackets are refused and the lights fitted from one frame.
+  bool exposure_control = true;
   // The simulated sensor's own exposure, in stops from the scene's (its
   // auto exposure): every frame not in a bracket is taken at 10 ms x
   // 2^exposure_stops. scripts/replay-frames.sh renders a bracket's

@@ -97,6 +97,7 @@ std::chrono::milliseconds CameraLink::idleWait() const {
 }
 
 void CameraLink::writeReport(nlohmann::json& camera_section) const {
+  camera_section["stream"] = source_.streamDescription();
   camera_section["losses"] = report_.counter("camera_losses");
   camera_section["reconnects"] = report_.counter("camera_reconnects");
   camera_section["reconnect_failures"] = report_.counter("camera_reconnect_failures");

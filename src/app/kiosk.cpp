@@ -290,6 +290,8 @@ class Kiosk {
       return Status::runtimeFailure(error);
     if (!source_->start(error))
       return options_.source == "images" ? Status::badInput(error) : Status::runtimeFailure(error);
+    if (!options_.quiet && !source_->streamDescription().empty())
+      log_ << "probelight: " << source_->name() << ": " << source_->streamDescription() << "\n";
     lights_->loadStoredLighting();
     return Status::ok();
   }
@@ -303,7 +305,7 @@ class Kiosk {
       camera.camera_id = settings.camera.id;
       camera.width_px = inputs_.camera.width_px;  // the calibrated size
       camera.height_px = inputs_.camera.height_px;
-      camera.layout = settings.camera.pixel_format == "nv12" ? PixelLayout::kNv12 : PixelLayout::kI420;
+      camera.pixel_format = settings.camera.pixel_format;
       source_ = std::make_unique<LibcameraSource>(camera);
     } else {
       PROBELIGHT_TRY(makeSimulatedCamera());
@@ -361,13 +363,14 @@ class Kiosk {
       return Status::badInput(simulatorInputName(error.what()) + error.what());
     }
     SimCameraOptions camera_options;
-    camera_options.layout = settings.sim.pixel_format == "yuv420" ? PixelLayout::kI420
-                            : settings.sim.pixel_format == "nv12" ? PixelLayout::kNv12
-                                                                  : PixelLayout::kRgb8;
+    camera_options.layout = PixelLayout::kRgb8;
+    for (const CameraFormatInfo& format : cameraFormats())
+      if (settings.sim.pixel_format == format.config_name) camera_options.layout = format.layout;
     camera_options.lost_at_frame = settings.sim.camera_lost_at_frame;
     camera_options.failed_restarts = settings.sim.camera_lost_restarts;
     camera_options.min_exposure_us = settings.sim.min_exposure_us;
     camera_options.min_exposure_reported = settings.sim.min_exposure_reported;
+    camera_options.exposure_controllable = settings.sim.exposure_control;
     camera_options.exposure_stops = settings.sim.exposure_stops;
     source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), settings.sim.camera_buffers, camera_options);
     return Status::ok();

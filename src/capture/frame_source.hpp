@@ -3,6 +3,7 @@
 // back by dropping the lease, exactly as libcamera requests are re-queued.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -30,21 +31,29 @@ struct FrameMetadata {
   std::optional<FrameTruth> truth;
 };
 
+// How a frame's pixels are stored. The camera formats are named as
+// libcamera (and DRM) name them; their byte order in memory follows the
+// DRM convention (little-endian words), so "RGB888" is B, G, R in memory.
 enum class PixelLayout {
-  kRgb8,  // `rgb`: 3 bytes per pixel (simulated RGB frames, image files)
-  kI420,  // `yuv`: Y' plane, then Cb and Cr planes at half size (libcamera's YUV420)
-  kNv12,  // `yuv`: Y' plane, then one plane of interleaved Cb, Cr at half size
+  kRgb8,      // tight R, G, B bytes in `rgb` (simulated RGB frames, image files, decoded MJPEG)
+  kI420,      // YUV420: Y' plane, then Cb and Cr planes at half size both ways
+  kNv12,      // NV12: Y' plane, then one plane of interleaved Cb, Cr at half size
+  kYuyv,      // YUYV: one plane of Y'0 Cb Y'1 Cr per pixel pair (4:2:2, chroma sited on Y'0; USB webcams)
+  kRgb888,    // RGB888: one plane, bytes B, G, R
+  kBgr888,    // BGR888: one plane, bytes R, G, B (vimc's format)
+  kXrgb8888,  // XRGB8888: one plane, bytes B, G, R, X
 };
 
-// A Y'CbCr 4:2:0 picture as planes, each with its own row stride (chroma
+// The pixels of a frame in `planes` (every layout but kRgb8), as planes,
+// each with its own row stride. I420 has three (Y', Cb, Cr), NV12 two (Y',
+// then Cb Cr pairs; data[2] unused), the packed layouts one. 4:2:0 chroma
 // is ceil(width/2) x ceil(height/2) samples, sited at the centre of each 2x2
-// block): I420 has three (Y', Cb, Cr), NV12 two (Y', then Cb Cr pairs;
-// data[2] unused). The planes are read in place: in a camera's mapped
-// dmabuf, or in the source's own storage.
-struct YuvPlanes {
+// block. The planes are read in place: in a camera's mapped dmabuf, or in
+// the source's own storage.
+struct FramePlanes {
   const std::uint8_t* data[3] = {nullptr, nullptr, nullptr};
   int stride_bytes[3] = {0, 0, 0};
-  YcbcrEncoding encoding;
+  YcbcrEncoding encoding;  // for the Y'CbCr layouts
   // The dmabuf behind each plane (-1: ordinary memory), for zero-copy import
   // as an EGLImage, and the plane's byte offset in it.
   int dmabuf_fd[3] = {-1, -1, -1};
@@ -61,6 +70,19 @@ struct YuvPlanes {
   }
 };
 
+// 3 for kI420, 2 for kNv12, 1 for the others.
+int planeCount(PixelLayout layout);
+// Y'CbCr-encoded: kI420, kNv12, kYuyv.
+bool isYuv(PixelLayout layout);
+// One plane of whole pixels: kYuyv (per pair), kRgb888, kBgr888, kXrgb8888.
+bool isPacked(PixelLayout layout);
+// Bytes a pixel takes in a packed layout's row (YUYV: 2); 0 for the others.
+int packedBytesPerPixel(PixelLayout layout);
+// Where R, G and B sit in a packed RGB pixel's bytes ({-1, -1, -1} otherwise).
+std::array<int, 3> packedRgbByteOffsets(PixelLayout layout);
+// libcamera's name for it ("YUV420", "BGR888", ...; "RGB" for kRgb8).
+const char* layoutName(PixelLayout layout);
+
 // One pooled buffer.
 // 3 for kI420, 2 for kNv12, 1 for kRgb8.
 int planeCount(PixelLayout layout);
@@ -71,10 +93,11 @@ struct FrameBuffer {
   int width_px = 0;
   int height_px = 0;
   ImageRGB8 rgb;                          // kRgb8
-  YuvPlanes yuv;                          // kI420, kNv12
-  std::vector<std::uint8_t> yuv_storage;  // YUV planes a source made itself
-  // kRgb8: the luma the source computed on its own thread (off the render
-  // thread); YUV frames need none: the Y' plane is the luma.
+  FramePlanes planes;                       // every layout but kRgb8
+  std::vector<std::uint8_t> plane_storage;  // planes a source made itself
+  // The luma the source computed on its own thread (off the render thread)
+  // for kRgb8 and the packed layouts; I420 and NV12 need none: their Y'
+  // plane is the luma.
   std::vector<std::uint8_t> luma_storage;
   FrameMetadata metadata;
 
@@ -82,15 +105,24 @@ struct FrameBuffer {
   LumaView luma() const;
   // Encoded R'G'B' codes of pixel (x, y) inside the frame, decoded from
   // Y'CbCr for YUV layouts (for the few hundred pixels the CPU reads, such
-  // as the tag's white border; the GPU converts whole frames).
+  // as the tag's white border; the GPU converts whole frames). It is the CPU
+  // reference of the GPU's conversion: 4:2:0 chroma is read from the
+  // pixel's block, YUYV's interpolated between co-sited samples as
+  // GL_LINEAR does.
   glm::u8vec3 rgbAt(int x, int y) const;
   // The whole frame as 8-bit R'G'B' (a copy; decoded from Y'CbCr for YUV).
   ImageRGB8 toRgb() const;
   // Makes this an RGB frame of `rgb`'s size whose luma is computed from it.
   void finishRgb();
-  // Makes this a kI420 or kNv12 frame of the given size in `yuv_storage`
+  // Makes this a kI420 or kNv12 frame of the given size in `plane_storage`
   // (tight rows) and returns the planes for the caller to fill.
-  YuvPlanes& allocateYuv420(PixelLayout layout, int width_px, int height_px, const YcbcrEncoding& encoding);
+  FramePlanes& allocateYuv420(PixelLayout layout, int width_px, int height_px, const YcbcrEncoding& encoding);
+  // Makes this a frame of a packed layout of the given size in
+  // `plane_storage` (tight rows) and returns its plane for the caller to
+  // fill; then finishPacked() computes its luma.
+  FramePlanes& allocatePacked(PixelLayout layout, int width_px, int height_px, const YcbcrEncoding& encoding);
+  // The luma of a packed frame whose plane is filled (YUYV: its Y' bytes).
+  void finishPacked();
 };
 
 class FrameSource;
@@ -142,6 +174,10 @@ class FrameSource : public ExposureControl {
   // Why the stream ended or failed (empty while healthy).
   virtual std::string lastError() const = 0;
   virtual std::string name() const = 0;
+  // The stream the source agreed on, once started ("BGR888 1920x1080
+  // (stride 5760)"), for the log and the run report; empty when it has
+  // nothing to say (replayed files).
+  virtual std::string streamDescription() const { return ""; }
   // lockExposure, setExposureLadder and shortestExposureUs: ExposureControl's,
   // false or nothing where the source has no such controls.
 };

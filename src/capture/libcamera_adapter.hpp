@@ -77,6 +77,13 @@ inline std::optional<double> exposureTimeMinUs(const libcamera::Camera& camera) 
   return static_cast<double>(shortest_us);
 }
 
+// Whether the camera takes a manual exposure time at all. vimc's sensor,
+// for one, has no ExposureTime control: it ignores one set in a request.
+inline bool hasExposureTimeControl(const libcamera::Camera& camera) {
+  const libcamera::ControlInfoMap& info = camera.controls();
+  return info.find(libcamera::controls::ExposureTime.id()) != info.end();
+}
+
 // The Y'CbCr encoding of a validated stream. No colour space (old pipeline
 // handlers) means what they produce: JPEG's full-range Rec601.
 inline YcbcrEncoding encodingOf(const std::optional<libcamera::ColorSpace>& color_space) {

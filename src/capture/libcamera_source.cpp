@@ -13,6 +13,9 @@
 #include <libcamera/framebuffer_allocator.h>
 #include <libcamera/request.h>
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "capture/libcamera_adapter.hpp"
 
 namespace probelight {
@@ -21,6 +24,7 @@ namespace probelight {
 // while it is lent out.
 struct LibcameraSource::Slot {
   std::unique_ptr<libcamera::Request> request;
+  libcamera::FrameBuffer* buffer = nullptr;
   std::vector<std::pair<void*, std::size_t>> regions;  // one mapping per distinct dmabuf
   const std::uint8_t* planes[3] = {nullptr, nullptr, nullptr};
   int fds[3] = {-1, -1, -1};
@@ -48,6 +52,8 @@ LibcameraSource::~LibcameraSource() { shutDown(); }
 std::string LibcameraSource::name() const {
   return "libcamera " + (camera_ ? camera_->id() : settings_.camera_id);
 }
+
+std::string LibcameraSource::streamDescription() const { return stream_description_; }
 
 std::string LibcameraSource::lastError() const {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -121,6 +127,7 @@ bool LibcameraSource::startCamera(std::string& error) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     shortest_exposure_us_ = libcamera_adapter::exposureTimeMinUs(*camera_);
+    exposure_time_controllable_ = libcamera_adapter::hasExposureTimeControl(*camera_);
   }
   std::unique_ptr<libcamera::CameraConfiguration> config = libcamera_adapter::viewfinderConfiguration(*camera_);
   if (!config || config->size() != 1) {
@@ -128,22 +135,51 @@ bool LibcameraSource::startCamera(std::string& error) {
     return false;
   }
   libcamera::StreamConfiguration& stream_config = config->at(0);
-  const bool nv12 = settings_.layout == PixelLayout::kNv12;
-  const libcamera::PixelFormat wanted_format = nv12 ? libcamera::formats::NV12 : libcamera::formats::YUV420;
-  const std::string format_name = nv12 ? "NV12" : "YUV420";
+  // The format: the cheapest the camera offers, or the one asked for.
+  std::vector<std::string> offered;
+  for (const libcamera::PixelFormat& format : stream_config.formats().pixelformats()) offered.push_back(format.toString());
+  const std::optional<CameraFormat> format = chooseCameraFormat(offered, settings_.pixel_format, camera_->id(), error);
+  if (!format) return false;
+  format_ = *format;
+  const CameraFormatInfo& info = cameraFormatInfo(format_);
+  const libcamera::PixelFormat wanted_format = libcamera::PixelFormat::fromString(info.libcamera_name);
+  // The size: camera.yaml's, whose intrinsics hold for it alone.
+  const FrameSizePx wanted_size{settings_.width_px, settings_.height_px};
+  OfferedSizes sizes;
+  for (const libcamera::Size& size : stream_config.formats().sizes(wanted_format))
+    sizes.listed.push_back({static_cast<int>(size.width), static_cast<int>(size.height)});
+  const libcamera::SizeRange range = stream_config.formats().range(wanted_format);
+  if (range.max.width > 0 && range.max.height > 0) {
+    sizes.range_min = FrameSizePx{static_cast<int>(range.min.width), static_cast<int>(range.min.height)};
+    sizes.range_max = FrameSizePx{static_cast<int>(range.max.width), static_cast<int>(range.max.height)};
+    sizes.width_step = static_cast<int>(std::max(range.hStep, 1u));
+    sizes.height_step = static_cast<int>(std::max(range.vStep, 1u));
+  }
+  if (const std::optional<FrameSizePx> nearest = nearestOfferedSize(sizes, wanted_size)) {
+    if (std::string problem = sizeMismatchProblem(camera_->id(), info.libcamera_name, wanted_size, *nearest);
+        !problem.empty()) {
+      error = problem;
+      return false;
+    }
+  }
   stream_config.pixelFormat = wanted_format;
   stream_config.size = libcamera::Size(static_cast<unsigned>(settings_.width_px), static_cast<unsigned>(settings_.height_px));
   stream_config.bufferCount = static_cast<unsigned>(settings_.buffer_count);
-  // JPEG's full-range Rec601: all 256 codes carry signal (the ball's
-  // highlights and shadows), and it is what the ISP gives stills. validate()
-  // may change it; the GPU decodes whatever it settles on.
-  stream_config.colorSpace = libcamera::ColorSpace::Sycc;
-  if (config->validate() == libcamera::CameraConfiguration::Invalid || stream_config.pixelFormat != wanted_format ||
-      stream_config.size.width != static_cast<unsigned>(settings_.width_px) ||
-      stream_config.size.height != static_cast<unsigned>(settings_.height_px)) {
-    error = "camera: " + camera_->id() + " cannot stream " + format_name + " at " + std::to_string(settings_.width_px) + "x" +
-            std::to_string(settings_.height_px) + " (it offers " + stream_config.toString() +
-            "): match camera.yaml's size to one it offers";
+  // JPEG's full-range Rec601 for Y'CbCr: all 256 codes carry signal (the
+  // ball's highlights and shadows), and it is what the ISP gives stills.
+  // validate() may change it; the GPU decodes whatever it settles on.
+  if (isYuv(info.layout)) stream_config.colorSpace = libcamera::ColorSpace::Sycc;
+  if (config->validate() == libcamera::CameraConfiguration::Invalid || stream_config.pixelFormat != wanted_format) {
+    error = "camera: " + camera_->id() + " cannot stream " + info.libcamera_name + " at " +
+            std::to_string(settings_.width_px) + "x" + std::to_string(settings_.height_px) + " (it offers " +
+            stream_config.toString() + ")";
+    return false;
+  }
+  if (std::string problem = sizeMismatchProblem(
+          camera_->id(), info.libcamera_name, wanted_size,
+          {static_cast<int>(stream_config.size.width), static_cast<int>(stream_config.size.height)});
+      !problem.empty()) {
+    error = problem;
     return false;
   }
   if (camera_->configure(config.get()) != 0) {
@@ -154,11 +190,15 @@ bool LibcameraSource::startCamera(std::string& error) {
   width_ = static_cast<int>(stream_config.size.width);
   height_ = static_cast<int>(stream_config.size.height);
   // YUV420's chroma rows are half the luma stride; NV12's pairs fill a
-  // row as long as the luma's.
+  // row as long as the luma's; the packed formats and MJPEG have one plane.
   strides_[0] = static_cast<int>(stream_config.stride);
-  strides_[1] = strides_[2] = nv12 ? strides_[0] : strides_[0] / 2;
-  const std::size_t plane_count = nv12 ? 2 : 3;
+  strides_[1] = strides_[2] = info.layout == PixelLayout::kNv12 ? strides_[0] : strides_[0] / 2;
+  const std::size_t plane_count = format_ == CameraFormat::kMjpeg ? 1 : static_cast<std::size_t>(planeCount(info.layout));
+  const std::string format_name = info.libcamera_name;
   encoding_ = libcamera_adapter::encodingOf(stream_config.colorSpace);
+  stream_description_ = format_name + " " + std::to_string(width_) + "x" + std::to_string(height_) + " (stride " +
+                        std::to_string(strides_[0]) + (format_ == CameraFormat::kMjpeg ? ", decoded on the CPU" : "") +
+                        ")";
   allocator_ = std::make_unique<libcamera::FrameBufferAllocator>(camera_);
   if (allocator_->allocate(stream_) < 0) {
     error = "camera: cannot allocate buffers (is /dev/dma_heap/* readable by this user?)";
@@ -168,6 +208,7 @@ bool LibcameraSource::startCamera(std::string& error) {
   for (const std::unique_ptr<libcamera::FrameBuffer>& buffer : allocator_->buffers(stream_)) {
     auto slot = std::make_unique<Slot>();
     slot->request = camera_->createRequest();
+    slot->buffer = buffer.get();
     if (!slot->request || slot->request->addBuffer(stream_, buffer.get()) != 0) {
       error = "camera: cannot create a capture request";
       return false;
@@ -198,17 +239,17 @@ bool LibcameraSource::startCamera(std::string& error) {
       slot->offsets[p] = plane.offset;
     }
     FrameBuffer& frame = slot->frame;
-    frame.layout = nv12 ? PixelLayout::kNv12 : PixelLayout::kI420;
+    frame.layout = info.layout;
     frame.width_px = width_;
     frame.height_px = height_;
     for (std::size_t p = 0; p < plane_count; ++p) {
-      frame.yuv.data[p] = slot->planes[p];
-      frame.yuv.stride_bytes[p] = strides_[p];
-      frame.yuv.dmabuf_fd[p] = slot->fds[p];
-      frame.yuv.dmabuf_offset[p] = slot->offsets[p];
+      frame.planes.data[p] = slot->planes[p];
+      frame.planes.stride_bytes[p] = strides_[p];
+      frame.planes.dmabuf_fd[p] = slot->fds[p];
+      frame.planes.dmabuf_offset[p] = slot->offsets[p];
     }
-    frame.yuv.encoding = encoding_;
-    frame.yuv.buffer_id = (generation_ << 32) | ++slot_number;
+    frame.planes.encoding = encoding_;
+    frame.planes.buffer_id = (generation_ << 32) | ++slot_number;
     slots_.push_back(std::move(slot));
   }
   camera_->requestCompleted.connect(this, &LibcameraSource::requestCompleted);
@@ -264,6 +305,10 @@ bool LibcameraSource::setExposureLadder(const std::vector<ManualExposure>& per_f
   std::vector<ExposureSetting> ladder;
   for (const ManualExposure& exposure : per_frame) ladder.push_back({exposure.exposure_us, exposure.analogue_gain});
   std::lock_guard<std::mutex> lock(mutex_);
+  // A camera without the control would hand back frames at its own
+  // exposure while their ladder said otherwise: refuse, and the bracket
+  // falls back to the single frame. Cancelling (an empty ladder) is fine.
+  if (!ladder.empty() && !exposure_time_controllable_) return false;
   exposure_.setManual(ladder);
   return true;
 }
@@ -356,6 +401,29 @@ FrameWait LibcameraSource::waitFrame(std::chrono::milliseconds timeout, FrameLea
     exposure_.onFrame({frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0});
   }
   frame.metadata.origin = "camera:" + std::to_string(frame.metadata.sequence);
+  if (format_ == CameraFormat::kMjpeg) {
+    // Decoded here, on the consumer's thread, into the slot's RGB image.
+    const std::size_t bytes_used = slot->buffer->metadata().planes()[0].bytesused;
+    const cv::Mat compressed(1, static_cast<int>(bytes_used), CV_8UC1, const_cast<std::uint8_t*>(slot->planes[0]));
+    cv::Mat decoded;
+    try {
+      decoded = cv::imdecode(compressed, cv::IMREAD_COLOR);
+    } catch (const cv::Exception&) {
+      decoded.release();
+    }
+    if (decoded.empty() || decoded.cols != width_ || decoded.rows != height_) {
+      // A damaged JPEG (a USB hiccup): drop it, keep streaming.
+      ++undecodable_frames_;
+      requeue(request);
+      return FrameWait::kTimeout;
+    }
+    frame.rgb.resize(width_, height_);
+    cv::Mat rgb(height_, width_, CV_8UC3, frame.rgb.pixels.data());
+    cv::cvtColor(decoded, rgb, cv::COLOR_BGR2RGB);
+    frame.finishRgb();
+  } else if (isPacked(frame.layout)) {
+    frame.finishPacked();  // the luma tag detection reads
+  }
   lease = FrameLease(&frame, [this, request](FrameBuffer*) { requeue(request); });
   return FrameWait::kFrame;
 }

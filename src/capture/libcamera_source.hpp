@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "capture/camera_format_choice.hpp"
 #include "capture/exposure_sequencer.hpp"
 #include "capture/frame_source.hpp"
 
@@ -45,9 +46,9 @@ struct LibcameraSettings {
   int width_px = 640;
   int height_px = 480;
   int buffer_count = 4;
-  // kI420 (libcamera's YUV420, the default) or kNv12: both give tag
-  // detection a Y' plane to read in place.
-  PixelLayout layout = PixelLayout::kI420;
+  // probelight.yaml's camera.pixel_format: "auto" (the cheapest format the
+  // camera offers; capture/camera_format_choice.hpp) or one by name.
+  std::string pixel_format = "auto";
 };
 
 class LibcameraSource final : public FrameSource {
@@ -71,6 +72,9 @@ class LibcameraSource final : public FrameSource {
   std::optional<double> shortestExposureUs() const override;
   // The stream's colour encoding as the camera agreed it.
   YcbcrEncoding encoding() const { return encoding_; }
+  // The stream the camera agreed to, once started: "BGR888 1920x1080
+  // (stride 5760)", for the log and the run report.
+  std::string streamDescription() const override;
 
  private:
   struct Slot;
@@ -90,6 +94,10 @@ class LibcameraSource final : public FrameSource {
   int width_ = 0, height_ = 0;
   int strides_[3] = {0, 0, 0};
   YcbcrEncoding encoding_;
+  CameraFormat format_ = CameraFormat::kYuv420;
+  bool exposure_time_controllable_ = true;  // guarded by mutex_
+  std::string stream_description_;
+  std::uint64_t undecodable_frames_ = 0;
   std::vector<std::unique_ptr<Slot>> slots_;
   bool started_ = false;
   // Buffers of each start() get fresh ids, so that an importer's cache

@@ -9,12 +9,36 @@
 namespace probelight {
 
 void encodeSimFrame(const ImageRGB8& rgb, PixelLayout layout, FrameBuffer& frame) {
-  if (!isYuv(layout)) {
+  const YcbcrEncoding sycc{YcbcrMatrix::kRec601, true};
+  if (layout == PixelLayout::kRgb8) {
     frame.rgb = rgb;
     frame.finishRgb();
     return;
   }
-  YuvPlanes& planes = frame.allocateYuv420(layout, rgb.width, rgb.height, YcbcrEncoding{YcbcrMatrix::kRec601, true});
+  if (isPacked(layout)) {
+    FramePlanes& planes = frame.allocatePacked(layout, rgb.width, rgb.height, sycc);
+    auto* plane = const_cast<std::uint8_t*>(planes.data[0]);
+    if (layout == PixelLayout::kYuyv) {
+      sim::encodeYcbcr422Sycc(rgb, plane, planes.stride_bytes[0]);
+    } else {
+      // The camera's byte order, written here from the format's definition
+      // (DRM's little-endian words: RGB888 is B, G, R in memory).
+      const bool blue_first = layout != PixelLayout::kBgr888;
+      const int step = layout == PixelLayout::kXrgb8888 ? 4 : 3;
+      for (int y = 0; y < rgb.height; ++y)
+        for (int x = 0; x < rgb.width; ++x) {
+          const std::uint8_t* in = rgb.row(y) + 3 * x;
+          std::uint8_t* out = plane + static_cast<std::size_t>(y) * planes.stride_bytes[0] + step * x;
+          out[0] = blue_first ? in[2] : in[0];
+          out[1] = in[1];
+          out[2] = blue_first ? in[0] : in[2];
+          if (step == 4) out[3] = 0xFF;
+        }
+    }
+    frame.finishPacked();
+    return;
+  }
+  FramePlanes& planes = frame.allocateYuv420(layout, rgb.width, rgb.height, sycc);
   auto* luma = const_cast<std::uint8_t*>(planes.data[0]);
   auto* cb = const_cast<std::uint8_t*>(planes.data[1]);
   if (layout == PixelLayout::kNv12)
@@ -38,6 +62,7 @@ bool SimFrameSource::lockExposure(bool locked) {
 }
 
 bool SimFrameSource::setExposureLadder(const std::vector<ManualExposure>& per_frame) {
+  if (!per_frame.empty() && !options_.exposure_controllable) return false;
   std::lock_guard<std::mutex> lock(exposure_mutex_);
   exposure_schedule_.request(per_frame);
   return true;
@@ -72,6 +97,12 @@ SimFrameSource::~SimFrameSource() {
 
 std::string SimFrameSource::name() const { return "sim:" + world_->scene().environment; }
 
+std::string SimFrameSource::streamDescription() const {
+  const CameraIntrinsics& camera = world_->scene().camera;
+  return std::string(layoutName(options_.layout)) + " " + std::to_string(camera.width_px) + "x" +
+         std::to_string(camera.height_px) + " (simulated)";
+}
+
 ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, FrameBuffer& buffer, std::string& error) {
   if (frame_count_ != 0 && index >= frame_count_) return Produced::kEndOfStream;
   if (options_.lost_at_frame >= 0 && index == static_cast<std::uint64_t>(options_.lost_at_frame) && !lost_) {
@@ -91,7 +122,7 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
   const double exposure_ev = std::log2(exposure.exposure_us * exposure.analogue_gain / kSimExposureUs);
   try {
     FrameTruth truth;
-    if (isYuv(options_.layout)) {
+    if (options_.layout != PixelLayout::kRgb8) {
       world_->render(index, rendered_, truth, exposure_ev);
       encodeSimFrame(rendered_, options_.layout, buffer);
     } else {

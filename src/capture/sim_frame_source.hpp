@@ -16,12 +16,14 @@
 namespace probelight {
 
 // `rgb` as the simulated camera delivers it in `layout`: kRgb8 as is (with
-// its luma), kI420 or kNv12 encoded as the board's ISP does
-// (sim/camera_ycbcr.hpp: full-range Rec601).
+// its luma), kI420 or kNv12 encoded as the board's ISP does and kYuyv as a
+// webcam does (sim/camera_ycbcr.hpp: full-range Rec601), the packed RGB
+// layouts in their byte order, each with its luma.
 void encodeSimFrame(const ImageRGB8& rgb, PixelLayout layout, FrameBuffer& frame);
 
 struct SimCameraOptions {
-  // kRgb8, or kI420 / kNv12 as the board's camera gives.
+  // kRgb8, or any camera layout (I420, NV12, YUYV, RGB888, BGR888, XRGB8888)
+  // as a camera gives it.
   PixelLayout layout = PixelLayout::kRgb8;
   // A camera that disappears: frame `lost_at_frame` fails ("disconnected"),
   // then the next `failed_restarts` start() calls fail; the one after
@@ -32,6 +34,9 @@ struct SimCameraOptions {
   double min_exposure_us = 0.0;
   // Whether shortestExposureUs() says it (real sources may not know).
   bool min_exposure_reported = true;
+  // false: a sensor with no exposure control (vimc's): a ladder is refused,
+  // as LibcameraSource refuses it for such a camera.
+  bool exposure_controllable = true;
   int failed_restarts = 0;
   // The sensor's own exposure outside a bracket, in stops from the scene's.
   double exposure_stops = 0.0;
@@ -47,6 +52,8 @@ class SimFrameSource : public ThreadedFrameSource {
   ~SimFrameSource() override;
 
   std::string name() const override;
+  // "YUYV 640x480 (simulated)": the layout the frames come in.
+  std::string streamDescription() const override;
   // The simulated camera has a fixed exposure (10 ms, gain 1, in every
   // frame's metadata): locking it changes nothing, and succeeds.
   bool lockExposure(bool locked) override;

@@ -11,12 +11,9 @@ void lumaFromRgb(const ImageRGB8& rgb, std::vector<std::uint8_t>& luma) {
     return;
   }
   luma.resize(pixel_count);
-  // 0.299, 0.587, 0.114 in 14-bit fixed point, rounded: OpenCV's RGB2GRAY.
-  constexpr std::uint32_t kR = 4899, kG = 9617, kB = 1868, kHalf = 1u << 13;
   const std::uint8_t* in = rgb.pixels.data();
   std::uint8_t* out = luma.data();
-  for (std::size_t i = 0; i < pixel_count; ++i, in += 3)
-    out[i] = static_cast<std::uint8_t>((kR * in[0] + kG * in[1] + kB * in[2] + kHalf) >> 14);
+  for (std::size_t i = 0; i < pixel_count; ++i, in += 3) out[i] = lumaCodeOfRgb(in[0], in[1], in[2]);
 }
 
 double rotationAngleDeg(const glm::dmat3& a, const glm::dmat3& b) {

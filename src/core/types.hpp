@@ -126,6 +126,13 @@ struct FrameTruth {
   bool probe_fully_visible = false;
 };
 
+// BT.601 luma of one pixel's R'G'B' codes: 0.299, 0.587, 0.114 in 14-bit
+// fixed point, rounded (OpenCV's RGB2GRAY).
+inline std::uint8_t lumaCodeOfRgb(std::uint8_t r, std::uint8_t g, std::uint8_t b) {
+  constexpr std::uint32_t kR = 4899, kG = 9617, kB = 1868, kHalf = 1u << 13;
+  return static_cast<std::uint8_t>((kR * r + kG * g + kB * b + kHalf) >> 14);
+}
+
 // BT.601 luma of sRGB bytes (OpenCV's RGB->GRAY fixed-point weights and
 // rounding), packed: stride = width. For the sim and image sources, which
 // give RGB; the libcamera source has a Y' plane already.

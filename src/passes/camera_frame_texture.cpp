@@ -14,14 +14,43 @@ namespace probelight::passes {
 namespace {
 
 // DRM fourccs, spelled out so that the pipeline does not need libdrm's
-// headers: YUV420 ('YU12': planes Y, Cb, Cr) and NV12 (Y, then Cb Cr pairs),
-// chroma halved both ways.
+// headers: YUV420 ('YU12': planes Y, Cb, Cr), NV12 (Y, then Cb Cr pairs),
+// YUYV, and the packed RGB formats (RGB888 'RG24', BGR888 'BG24', XRGB8888
+// 'XR24').
 constexpr EGLint fourcc(char a, char b, char c, char d) {
   return static_cast<EGLint>(static_cast<unsigned>(a) | (static_cast<unsigned>(b) << 8) |
                              (static_cast<unsigned>(c) << 16) | (static_cast<unsigned>(d) << 24));
 }
-constexpr EGLint kDrmFormatYuv420 = fourcc('Y', 'U', '1', '2');
-constexpr EGLint kDrmFormatNv12 = fourcc('N', 'V', '1', '2');
+EGLint drmFourccOf(PixelLayout layout) {
+  switch (layout) {
+    case PixelLayout::kI420: return fourcc('Y', 'U', '1', '2');
+    case PixelLayout::kNv12: return fourcc('N', 'V', '1', '2');
+    case PixelLayout::kYuyv: return fourcc('Y', 'U', 'Y', 'V');
+    case PixelLayout::kRgb888: return fourcc('R', 'G', '2', '4');
+    case PixelLayout::kBgr888: return fourcc('B', 'G', '2', '4');
+    case PixelLayout::kXrgb8888: return fourcc('X', 'R', '2', '4');
+    case PixelLayout::kRgb8: break;
+  }
+  return 0;
+}
+
+// The bytes one row of plane `plane` needs at least.
+int minimumRowBytes(PixelLayout layout, int plane, int width_px) {
+  const int chroma_width = (width_px + 1) / 2;
+  if (layout == PixelLayout::kYuyv) return 4 * chroma_width;
+  if (isPacked(layout)) return packedBytesPerPixel(layout) * width_px;
+  if (plane == 0) return width_px;
+  return layout == PixelLayout::kNv12 ? 2 * chroma_width : chroma_width;
+}
+
+int bytesPerTexel(GLenum format) {
+  switch (format) {
+    case GL_LUMINANCE_ALPHA: return 2;
+    case GL_RGB: return 3;
+    case GL_RGBA: return 4;
+    default: return 1;
+  }
+}
 
 }  // namespace
 
@@ -30,6 +59,7 @@ const char* toString(FrameUploadPath path) {
     case FrameUploadPath::kNone: return "none";
     case FrameUploadPath::kRgbUpload: return "rgb upload";
     case FrameUploadPath::kYuvUpload: return "yuv upload";
+    case FrameUploadPath::kPackedRgbUpload: return "packed rgb upload";
     case FrameUploadPath::kDmabufImport: return "dmabuf import";
   }
   return "?";
@@ -46,9 +76,16 @@ bool CameraFrameTexture::init(const gles::Capabilities& capabilities, std::strin
   unpack_row_length_ = capabilities.unpack_subimage;
   auto planes = gles::Program::fromEmbedded("camera_yuv.vert", "camera_yuv_planes.frag", "", error);
   auto nv12 = gles::Program::fromEmbedded("camera_yuv.vert", "camera_yuv_planes.frag", "#define PL_NV12 1", error);
-  if (!planes || !nv12 || !quad_.init(error)) return false;
+  auto yuyv = gles::Program::fromEmbedded("camera_yuv.vert", "camera_yuyv.frag", "", error);
+  auto packed = gles::Program::fromEmbedded("camera_yuv.vert", "camera_packed_rgb.frag", "", error);
+  auto packed_blue_first =
+      gles::Program::fromEmbedded("camera_yuv.vert", "camera_packed_rgb.frag", "#define PL_BLUE_FIRST 1", error);
+  if (!planes || !nv12 || !yuyv || !packed || !packed_blue_first || !quad_.init(error)) return false;
   planes_program_ = std::move(*planes);
   nv12_program_ = std::move(*nv12);
+  yuyv_program_ = std::move(*yuyv);
+  packed_rgb_program_ = std::move(*packed);
+  packed_blue_first_program_ = std::move(*packed_blue_first);
   if (allow_dmabuf_import && capabilities.egl_dmabuf_import && capabilities.egl_image_external) {
     display_ = eglGetCurrentDisplay();
     create_image_ = reinterpret_cast<PFNEGLCREATEIMAGEKHRPROC>(eglGetProcAddress("eglCreateImageKHR"));
@@ -85,14 +122,12 @@ bool CameraFrameTexture::checkSize(int width_px, int height_px, std::string& err
 bool CameraFrameTexture::upload(const FrameBuffer& frame, std::string& error) {
   if (frame.layout == PixelLayout::kRgb8) return upload(frame.rgb, error);
   if (!checkSize(frame.width_px, frame.height_px, error)) return false;
-  const YuvPlanes& planes = frame.yuv;
-  const bool nv12 = frame.layout == PixelLayout::kNv12;
-  const int chroma_row_bytes = (nv12 ? 2 : 1) * ((frame.width_px + 1) / 2);
-  bool planes_ok = planes.data[0] && planes.stride_bytes[0] >= frame.width_px;
-  for (int p = 1; p < planeCount(frame.layout); ++p)
-    planes_ok = planes_ok && planes.data[p] && planes.stride_bytes[p] >= chroma_row_bytes;
+  const FramePlanes& planes = frame.planes;
+  bool planes_ok = true;
+  for (int p = 0; p < planeCount(frame.layout); ++p)
+    planes_ok = planes_ok && planes.data[p] && planes.stride_bytes[p] >= minimumRowBytes(frame.layout, p, frame.width_px);
   if (!planes_ok) {
-    error = std::string("CameraFrameTexture: the ") + (nv12 ? "NV12" : "I420") +
+    error = std::string("CameraFrameTexture: the ") + layoutName(frame.layout) +
             " frame's planes are missing or their strides are shorter than a row";
     return false;
   }
@@ -108,8 +143,12 @@ bool CameraFrameTexture::upload(const FrameBuffer& frame, std::string& error) {
     dmabuf_import_problem_ = import_error;
     forgetImportedBuffers();
   }
-  if (!uploadPlanes(planes, frame.layout, frame.width_px, frame.height_px, error)) return false;
-  last_path_ = FrameUploadPath::kYuvUpload;
+  const bool uploaded = frame.layout == PixelLayout::kYuyv ? uploadYuyv(planes, frame.width_px, frame.height_px, error)
+                        : isPacked(frame.layout)
+                            ? uploadPackedRgb(planes, frame.layout, frame.width_px, frame.height_px, error)
+                            : uploadPlanes(planes, frame.layout, frame.width_px, frame.height_px, error);
+  if (!uploaded) return false;
+  last_path_ = isYuv(frame.layout) ? FrameUploadPath::kYuvUpload : FrameUploadPath::kPackedRgbUpload;
   return true;
 }
 
@@ -165,7 +204,7 @@ bool CameraFrameTexture::uploadPlane(gles::Texture& texture, int& allocated_widt
                                      GLenum& allocated_format, const std::uint8_t* data, int stride_bytes, int width_px,
                                      int height_px, GLenum format, std::string& error) {
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  const int bytes_per_texel = format == GL_LUMINANCE_ALPHA ? 2 : 1;
+  const int bytes_per_texel = bytesPerTexel(format);
   const bool tight = stride_bytes == width_px * bytes_per_texel;
   const bool reallocate = !texture.valid() || allocated_width != width_px || allocated_height != height_px ||
                           allocated_format != format;
@@ -182,13 +221,14 @@ bool CameraFrameTexture::uploadPlane(gles::Texture& texture, int& allocated_widt
   glBindTexture(GL_TEXTURE_2D, texture.id());
   if (tight) {
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_px, height_px, format, GL_UNSIGNED_BYTE, data);
-  } else if (unpack_row_length_) {
+  } else if (unpack_row_length_ && stride_bytes % bytes_per_texel == 0) {
     glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, stride_bytes / bytes_per_texel);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_px, height_px, format, GL_UNSIGNED_BYTE, data);
     glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, 0);
   } else {
-    // Plain GLES2 cannot skip padding: one row at a time (cameras pad rows
-    // to 32 or 64 bytes; the copy stays in the driver).
+    // Plain GLES2 cannot skip padding, and a row length counts whole
+    // texels (RGB rows padded to 64 bytes are not): one row at a time
+    // (cameras pad rows to 32 or 64 bytes; the copy stays in the driver).
     for (int row = 0; row < height_px; ++row)
       glTexSubImage2D(GL_TEXTURE_2D, 0, 0, row, width_px, 1, format, GL_UNSIGNED_BYTE,
                       data + static_cast<std::size_t>(row) * static_cast<std::size_t>(stride_bytes));
@@ -196,7 +236,7 @@ bool CameraFrameTexture::uploadPlane(gles::Texture& texture, int& allocated_widt
   return gles::checkGl("glTexSubImage2D(camera plane)", error);
 }
 
-bool CameraFrameTexture::uploadPlanes(const YuvPlanes& planes, PixelLayout layout, int width_px, int height_px,
+bool CameraFrameTexture::uploadPlanes(const FramePlanes& planes, PixelLayout layout, int width_px, int height_px,
                                       std::string& error) {
   const int chroma_width = (width_px + 1) / 2, chroma_height = (height_px + 1) / 2;
   const bool nv12 = layout == PixelLayout::kNv12;
@@ -226,6 +266,47 @@ bool CameraFrameTexture::uploadPlanes(const YuvPlanes& planes, PixelLayout layou
   const bool drawn = drawIntoTexture(program, error);
   glActiveTexture(GL_TEXTURE0);
   return drawn;
+}
+
+bool CameraFrameTexture::uploadYuyv(const FramePlanes& planes, int width_px, int height_px, std::string& error) {
+  // The same bytes twice: a texel a pixel (Y' in .r) and a texel a pair.
+  const int pair_count = (width_px + 1) / 2;
+  if (!uploadPlane(planes_[0], plane_width_[0], plane_height_[0], plane_format_[0], planes.data[0],
+                   planes.stride_bytes[0], width_px, height_px, GL_LUMINANCE_ALPHA, error) ||
+      !uploadPlane(planes_[1], plane_width_[1], plane_height_[1], plane_format_[1], planes.data[0],
+                   planes.stride_bytes[0], pair_count, height_px, GL_RGBA, error))
+    return false;
+  const YcbcrDecoding decoding = ycbcrDecoding(planes.encoding);
+  yuyv_program_.use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, planes_[0].id());
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, planes_[1].id());
+  glUniform1i(yuyv_program_.uniform("u_luma"), 0);
+  glUniform1i(yuyv_program_.uniform("u_pairs"), 1);
+  // Pixel i (texcoord u = (i + 0.5) / w) reads chroma at i / 2 samples,
+  // texcoord (i / 2 + 0.5) / pairs = u * w / (2 pairs) + 0.25 / pairs.
+  glUniform2f(yuyv_program_.uniform("u_chroma_scale"), static_cast<float>(width_px) / (2.0f * pair_count), 1.0f);
+  glUniform2f(yuyv_program_.uniform("u_chroma_offset"), 0.25f / static_cast<float>(pair_count), 0.0f);
+  glUniformMatrix3fv(yuyv_program_.uniform("u_ycbcr_to_rgb"), 1, GL_FALSE, decoding.matrix);
+  glUniform3fv(yuyv_program_.uniform("u_offset"), 1, decoding.offset);
+  const bool drawn = drawIntoTexture(yuyv_program_, error);
+  glActiveTexture(GL_TEXTURE0);
+  return drawn;
+}
+
+bool CameraFrameTexture::uploadPackedRgb(const FramePlanes& planes, PixelLayout layout, int width_px, int height_px,
+                                         std::string& error) {
+  const GLenum format = layout == PixelLayout::kXrgb8888 ? GLenum(GL_RGBA) : GLenum(GL_RGB);
+  if (!uploadPlane(planes_[0], plane_width_[0], plane_height_[0], plane_format_[0], planes.data[0],
+                   planes.stride_bytes[0], width_px, height_px, format, error))
+    return false;
+  const gles::Program& program = layout == PixelLayout::kBgr888 ? packed_rgb_program_ : packed_blue_first_program_;
+  program.use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, planes_[0].id());
+  glUniform1i(program.uniform("u_packed"), 0);
+  return drawIntoTexture(program, error);
 }
 
 bool CameraFrameTexture::drawIntoTexture(const gles::Program& program, std::string& error) {
@@ -263,7 +344,7 @@ bool CameraFrameTexture::convertExternalImage(EGLImageKHR image, int width_px, i
   return drawn;
 }
 
-bool CameraFrameTexture::importDmabuf(const YuvPlanes& planes, PixelLayout layout, int width_px, int height_px,
+bool CameraFrameTexture::importDmabuf(const FramePlanes& planes, PixelLayout layout, int width_px, int height_px,
                                       std::string& error) {
   if (width_px != imported_width_px_ || height_px != imported_height_px_) forgetImportedBuffers();
   imported_width_px_ = width_px;
@@ -276,9 +357,8 @@ bool CameraFrameTexture::importDmabuf(const YuvPlanes& planes, PixelLayout layou
     const EGLint color_space = encoding.matrix == YcbcrMatrix::kRec601   ? EGL_ITU_REC601_EXT
                                : encoding.matrix == YcbcrMatrix::kRec709 ? EGL_ITU_REC709_EXT
                                                                          : EGL_ITU_REC2020_EXT;
-    const bool nv12 = layout == PixelLayout::kNv12;
     std::vector<EGLint> attributes = {EGL_WIDTH, width_px, EGL_HEIGHT, height_px, EGL_LINUX_DRM_FOURCC_EXT,
-                                      nv12 ? kDrmFormatNv12 : kDrmFormatYuv420};
+                                      drmFourccOf(layout)};
     const EGLint plane_keys[3][3] = {
         {EGL_DMA_BUF_PLANE0_FD_EXT, EGL_DMA_BUF_PLANE0_OFFSET_EXT, EGL_DMA_BUF_PLANE0_PITCH_EXT},
         {EGL_DMA_BUF_PLANE1_FD_EXT, EGL_DMA_BUF_PLANE1_OFFSET_EXT, EGL_DMA_BUF_PLANE1_PITCH_EXT},
@@ -287,14 +367,19 @@ bool CameraFrameTexture::importDmabuf(const YuvPlanes& planes, PixelLayout layou
       attributes.insert(attributes.end(), {plane_keys[p][0], planes.dmabuf_fd[p], plane_keys[p][1],
                                            static_cast<EGLint>(planes.dmabuf_offset[p]), plane_keys[p][2],
                                            planes.stride_bytes[p]});
-    attributes.insert(attributes.end(),
-                      {EGL_YUV_COLOR_SPACE_HINT_EXT, color_space, EGL_SAMPLE_RANGE_HINT_EXT,
-                       encoding.full_range ? EGL_YUV_FULL_RANGE_EXT : EGL_YUV_NARROW_RANGE_EXT,
-                       EGL_YUV_CHROMA_HORIZONTAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT,
-                       EGL_YUV_CHROMA_VERTICAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT, EGL_NONE});
+    // The colour-space hints are for Y'CbCr buffers only. 4:2:0 chroma is
+    // centre-sited; YUYV's sits on its first pixel (horizontally 0).
+    if (isYuv(layout))
+      attributes.insert(attributes.end(),
+                        {EGL_YUV_COLOR_SPACE_HINT_EXT, color_space, EGL_SAMPLE_RANGE_HINT_EXT,
+                         encoding.full_range ? EGL_YUV_FULL_RANGE_EXT : EGL_YUV_NARROW_RANGE_EXT,
+                         EGL_YUV_CHROMA_HORIZONTAL_SITING_HINT_EXT,
+                         layout == PixelLayout::kYuyv ? EGL_YUV_CHROMA_SITING_0_EXT : EGL_YUV_CHROMA_SITING_0_5_EXT,
+                         EGL_YUV_CHROMA_VERTICAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT});
+    attributes.push_back(EGL_NONE);
     image = create_image_(display_, EGL_NO_CONTEXT, EGL_LINUX_DMA_BUF_EXT, nullptr, attributes.data());
     if (image == EGL_NO_IMAGE_KHR) {
-      error = std::string("eglCreateImageKHR refused the camera's ") + (nv12 ? "NV12" : "YUV420") +
+      error = std::string("eglCreateImageKHR refused the camera's ") + layoutName(layout) +
               " dmabuf (EGL error 0x" +
               [] {
                 char text[16];

@@ -1,11 +1,12 @@
 // Stage 1: the camera frame as a GL texture.
-// Input: a FrameBuffer: sRGB bytes (simulated RGB, image files), or the
-// board camera's I420 or NV12 planes. Output: one 2D texture of sRGB bytes, LINEAR,
+// Input: a FrameBuffer: sRGB bytes (simulated RGB, image files, decoded
+// MJPEG), or a camera's planes: I420, NV12 or YUYV Y'CbCr, or packed RGB
+// (RGB888, BGR888, XRGB8888). Output: one 2D texture of sRGB bytes, LINEAR,
 // CLAMP_TO_EDGE, image row 0 at t = 0, that every later stage samples. An
 // OpenCV pixel position p (pixel centres at integers) is sampled at
 // texcoord = (p + 0.5) / size.
 //
-// YUV frames take one of two paths to it:
+// Camera frames take one of two paths to it:
 //  - dmabuf import (zero-copy): when the planes live in a camera dmabuf and
 //    EGL has EGL_EXT_image_dma_buf_import and GL has
 //    GL_OES_EGL_image_external, the buffer is imported once as an EGLImage
@@ -13,7 +14,8 @@
 //    pass samples it as samplerExternalOES into the RGB texture;
 //  - upload: the planes as LUMINANCE (NV12's Cb Cr pairs as
 //    LUMINANCE_ALPHA) textures, converted by a pass with the stream's matrix
-//    and range (core/ycbcr.hpp).
+//    and range (core/ycbcr.hpp); YUYV's one plane as two views of the same
+//    bytes; packed RGB as RGB (RGBA) bytes, put in R, G, B order by a pass.
 // A failed import falls back to the upload path for good, said once.
 #pragma once
 
@@ -32,7 +34,7 @@
 
 namespace probelight::passes {
 
-enum class FrameUploadPath { kNone, kRgbUpload, kYuvUpload, kDmabufImport };
+enum class FrameUploadPath { kNone, kRgbUpload, kYuvUpload, kPackedRgbUpload, kDmabufImport };
 const char* toString(FrameUploadPath path);
 
 class CameraFrameTexture {
@@ -72,13 +74,15 @@ class CameraFrameTexture {
   };
   bool checkSize(int width_px, int height_px, std::string& error) const;
   bool ensureRenderableTexture(int width_px, int height_px, std::string& error);
-  bool uploadPlanes(const YuvPlanes& planes, PixelLayout layout, int width_px, int height_px, std::string& error);
+  bool uploadPlanes(const FramePlanes& planes, PixelLayout layout, int width_px, int height_px, std::string& error);
+  bool uploadYuyv(const FramePlanes& planes, int width_px, int height_px, std::string& error);
+  bool uploadPackedRgb(const FramePlanes& planes, PixelLayout layout, int width_px, int height_px, std::string& error);
   bool uploadPlane(gles::Texture& texture, int& allocated_width, int& allocated_height, GLenum& allocated_format,
                    const std::uint8_t* data, int stride_bytes, int width_px, int height_px, GLenum format,
                    std::string& error);
   // True when imported; false with `error` empty when the frame cannot be
   // imported (no dmabuf), false with `error` set when an import failed.
-  bool importDmabuf(const YuvPlanes& planes, PixelLayout layout, int width_px, int height_px, std::string& error);
+  bool importDmabuf(const FramePlanes& planes, PixelLayout layout, int width_px, int height_px, std::string& error);
   void forgetImportedBuffers();
   // Draws `program` over the whole output texture.
   bool drawIntoTexture(const gles::Program& program, std::string& error);
@@ -93,6 +97,9 @@ class CameraFrameTexture {
 
   gles::Program planes_program_;  // I420: three LUMINANCE planes
   gles::Program nv12_program_;    // NV12: LUMINANCE + LUMINANCE_ALPHA
+  gles::Program yuyv_program_;    // YUYV: LUMINANCE_ALPHA + RGBA views of one plane
+  gles::Program packed_rgb_program_;         // BGR888: R, G, B bytes
+  gles::Program packed_blue_first_program_;  // RGB888, XRGB8888: B, G, R bytes
   gles::Program external_program_;
   gles::FullScreenQuad quad_;
   gles::Texture planes_[3];

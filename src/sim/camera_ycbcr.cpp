@@ -40,4 +40,28 @@ void encodeYcbcr420Sycc(const ImageRGB8& rgb, std::uint8_t* y_plane, int y_strid
     }
 }
 
+void encodeYcbcr422Sycc(const ImageRGB8& rgb, std::uint8_t* plane, int stride) {
+  const int width = rgb.width, height = rgb.height;
+  auto luma = [](const std::uint8_t* pixel) { return 0.299 * pixel[0] + 0.587 * pixel[1] + 0.114 * pixel[2]; };
+  for (int y = 0; y < height; ++y) {
+    const std::uint8_t* row = rgb.row(y);
+    std::uint8_t* out = plane + static_cast<std::size_t>(y) * static_cast<std::size_t>(stride);
+    for (int pair = 0; 2 * pair < width; ++pair) {
+      const int x0 = 2 * pair, x1 = std::min(x0 + 1, width - 1);
+      double cb = 0.0, cr = 0.0;
+      const int taps[3] = {std::max(x0 - 1, 0), x0, x1};
+      const double weights[3] = {0.25, 0.5, 0.25};
+      for (int t = 0; t < 3; ++t) {
+        const std::uint8_t* pixel = row + 3 * taps[t];
+        cb += weights[t] * (pixel[2] - luma(pixel)) / 1.772;
+        cr += weights[t] * (pixel[0] - luma(pixel)) / 1.402;
+      }
+      out[4 * pair + 0] = toCode(luma(row + 3 * x0));
+      out[4 * pair + 1] = toCode(128.0 + cb);
+      out[4 * pair + 2] = toCode(luma(row + 3 * x1));
+      out[4 * pair + 3] = toCode(128.0 + cr);
+    }
+  }
+}
+
 }  // namespace probelight::sim

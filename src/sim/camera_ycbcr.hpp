@@ -18,4 +18,10 @@ namespace probelight::sim {
 void encodeYcbcr420Sycc(const ImageRGB8& rgb, std::uint8_t* y_plane, int y_stride, std::uint8_t* cb_plane,
                         std::uint8_t* cr_plane, int chroma_stride, int chroma_step);
 
+// YUYV (4:2:2, one plane of Y'0 Cb Y'1 Cr per pixel pair), as a USB
+// webcam gives it: chroma sample k sits on pixel 2k (co-sited, BT.601) and
+// is filtered [1/4, 1/2, 1/4] over pixels 2k-1, 2k, 2k+1 (edges repeated).
+// An odd width's last pair repeats its pixel's Y'.
+void encodeYcbcr422Sycc(const ImageRGB8& rgb, std::uint8_t* plane, int stride);
+
 }  // namespace probelight::sim

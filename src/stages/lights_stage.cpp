@@ -153,6 +153,11 @@ Status LightsStage::run(FrameContext& ctx, const MapsStage& maps) {
       if (ctx.track.found) {
         const BracketStart started =
             bracket_.start(frameExposure(ctx.frame), ctx.number, ctx.outline.valid, frame_ball_clips);
+        if (started == BracketStart::kUnsupported && !said_no_exposure_control_) {
+          // Every recalibration would find the same: say it once.
+          said_no_exposure_control_ = true;
+          warn("camera has no exposure control: no exposure bracket; the lights are fitted from single frames");
+        }
         if (started == BracketStart::kStarted) {
           if (!rgb) rgb = ctx.frame.toRgb();
           bracket_frames_ = BracketFrames{std::move(*rgb), ctx.view, ctx.outline, exposure_locked_, {},

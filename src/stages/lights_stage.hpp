@@ -152,6 +152,7 @@ class LightsStage {
   double frame_time_s_ = 0.0;  // of the last frame the pipeline ran on
   glm::dvec3 lights_fitted_e_up_{0.0};  // the ground's irradiance when the lights were last fitted
   bool exposure_locked_ = false;
+  bool said_no_exposure_control_ = false;
 
   nlohmann::json lights_report_, hdr_report_, white_border_report_, clipped_now_report_, state_report_;
   nlohmann::json exposure_at_last_fit_;  // null until a fit

@@ -115,7 +115,11 @@ struct ObjectConfig {
 // The board's camera (--source libcamera); its size is camera.yaml's.
 struct CameraConfig {
   std::string id;  // libcamera's camera id; empty: the first camera
-  std::string pixel_format = "yuv420";  // or "nv12"
+  // "auto": the first the camera offers of YUV420, NV12, YUYV, BGR888,
+  // RGB888, XRGB8888, MJPEG (capture/camera_format_choice.hpp), or one of
+  // those by name (lower case); a camera that does not offer it is refused
+  // with the formats it does offer.
+  std::string pixel_format = "auto";
   // Freeze auto exposure and white balance while the lights are fitted, so
   // that every frame of a recalibration sees the ball alike. Not during the
   // first `exposure_settle_frames` after the camera starts (AE is still

@@ -4,6 +4,7 @@
 // during recalibration. Plus the reconnect schedule on its own.
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -101,6 +102,38 @@ TEST_F(CameraRun, YuvFramesTrackAndLightAsWellAsRgbFrames) {
   EXPECT_NEAR(nv12_report["accuracy"]["diffuse_irradiance_rel_error_vs_clipped"].get<double>(),
               accuracy["diffuse_irradiance_rel_error_vs_clipped"].get<double>(), 1e-6)
       << "the same pixels in another layout";
+}
+
+// A USB webcam's YUYV (4:2:2, luma decoded on the CPU for detection, the
+// pairs converted on the GPU) tracks and lights as I420 does: the same
+// limits. The RGB-family formats of vimc and other RGB sensor pipelines
+// carry the RGB run's very pixels in another byte order, so the run is the
+// RGB run: the same light to a float's rounding.
+TEST_F(CameraRun, PackedCameraFormatsTrackAndLightAsRgbFramesDo) {
+  const testing::CommandResult rgb = runSim("rgb", "", 30);
+  ASSERT_EQ(rgb.exit_status, 0) << rgb.stderr_text;
+  const nlohmann::json rgb_report = readReport(dir_ / "rgb");
+  const double rgb_error = rgb_report["accuracy"]["diffuse_irradiance_rel_error_vs_clipped"].get<double>();
+  for (const std::string format : {"yuyv", "bgr888", "xrgb8888"}) {
+    const testing::CommandResult run = runSim(format, "sim:\n  pixel_format: " + format + "\n", 30);
+    ASSERT_EQ(run.exit_status, 0) << run.stderr_text;
+    const nlohmann::json report = readReport(dir_ / format);
+    std::string upper = format;
+    for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    EXPECT_EQ(report["camera"]["stream"].get<std::string>().rfind(upper + " ", 0), 0u) << report["camera"].dump();
+    EXPECT_EQ(report["camera"]["frame_upload"], format == "yuyv" ? "yuv upload" : "packed rgb upload") << format;
+    EXPECT_EQ(report["tag_status"]["frames"]["found"].get<int>() + report["counters"].value("frames_in_bracket", 0), 30)
+        << format;
+    const nlohmann::json& accuracy = report["accuracy"];
+    EXPECT_LE(accuracy["pose_rotation_error_deg"].get<double>(), 0.3) << format;
+    EXPECT_LE(accuracy["probe_center_error_px"].get<double>(), 0.5) << format;
+    EXPECT_LE(accuracy["probe_radius_error_px"].get<double>(), 0.5) << format;
+    const double error = accuracy["diffuse_irradiance_rel_error_vs_clipped"].get<double>();
+    if (format == "yuyv")
+      EXPECT_LE(error, rgb_error + 0.01);
+    else
+      EXPECT_NEAR(error, rgb_error, 1e-6) << format << ": the same pixels in another byte order";
+  }
 }
 
 // The camera disappears at frame 12 and the first two reconnects fail: the

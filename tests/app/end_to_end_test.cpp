@@ -777,6 +777,33 @@ TEST_F(EndToEnd, RecalibrationBracketsTheBallAndFindsTheSun) {
 namespace probelight {
 namespace {
 
+// A camera with no exposure control (vimc's sensor has none): the fit
+// frame clips the sun as above, the bracket is refused, and the lights are
+// fitted from the single frame all the same, with no HDR section in the
+// report. The log says so once (a warning, for the journal).
+TEST_F(EndToEnd, WithoutExposureControlTheFitFallsBackToTheSingleFrameAndSaysSoOnce) {
+  const fs::path config = dir_ / "no-exposure.yaml";
+  std::ofstream(config) << "sim:\n  env: sun_sky\n  exposure_control: false\n";
+  const fs::path out = dir_ / "no-exposure";
+  const CommandResult result =
+      run("run --frames 90 --save-every 0 --path static --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  const nlohmann::json& counters = report["counters"];
+  const int fits = counters["calibrations_completed"].get<int>();
+  EXPECT_EQ(fits, 1) << counters.dump();
+  EXPECT_EQ(counters.value("brackets_unsupported", 0), fits) << counters.dump();
+  EXPECT_EQ(counters.value("brackets_merged", 0), 0);
+  EXPECT_FALSE(report.contains("hdr")) << report["hdr"].dump(2);
+  ASSERT_TRUE(report.contains("lights"));
+  const std::string message = "camera has no exposure control: no exposure bracket";
+  const std::string& log = result.stderr_text;
+  const std::size_t first = log.find(message);
+  ASSERT_NE(first, std::string::npos) << log;
+  EXPECT_EQ(log.find(message, first + 1), std::string::npos) << "said more than once:\n" << log;
+  EXPECT_EQ(report["frames"], 90);
+}
+
 // The frame-rate maps stay 8-bit; the clipped lights the last fit measured
 // follow them. A soft box 40x the sky, on from the start, clips in the
 // ball: the fit gives it a clipped light. Switched off at frame 40, its

@@ -71,16 +71,19 @@ int maxDifference(const ImageRGB8& a, const ImageRGB8& b) {
   return worst;
 }
 
-// Same, over the pixels at least one pixel inside their patch: chroma is
-// reconstructed by linear interpolation between block centres (what
-// GL_LINEAR and the external sampler's 0.5 siting do), which blends
+// Same, over the pixels at least `margin_px` inside their patch: 4:2:0
+// chroma is reconstructed by linear interpolation between block centres
+// (what GL_LINEAR and the external sampler's 0.5 siting do), which blends
 // neighbouring patches' colours across the one pixel next to each border.
-int maxDifferenceInsidePatches(const ImageRGB8& a, const ImageRGB8& b, int patch_px) {
+// YUYV's co-sited chroma reaches two pixels in from the left edge (sample k
+// filters pixels 2k-1..2k+1, and pixel 2k+1 reads samples k and k+1).
+int maxDifferenceInsidePatches(const ImageRGB8& a, const ImageRGB8& b, int patch_px, int margin_px = 1) {
   int worst = 0;
   for (int y = 0; y < a.height; ++y)
     for (int x = 0; x < a.width; ++x) {
       const int px = x % patch_px, py = y % patch_px;
-      if (px == 0 || px == patch_px - 1 || py == 0 || py == patch_px - 1 || x == a.width - 1 || y == a.height - 1)
+      if (px < margin_px || px >= patch_px - margin_px || py < margin_px || py >= patch_px - margin_px ||
+          x >= a.width - margin_px || y >= a.height - margin_px)
         continue;
       for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(a.row(y)[3 * x + c] - b.row(y)[3 * x + c]));
     }
@@ -127,10 +130,10 @@ TEST_F(GpuTest, YuvConversionHoldsOnThePlain8BitPathForOddSizesAndPaddedRows) {
     FrameBuffer strided = tight;
     for (int p = 0; p < plane_count; ++p) {
       for (int row = 0; row < heights[p]; ++row)
-        std::copy_n(tight.yuv.data[p] + row * tight.yuv.stride_bytes[p], row_bytes[p],
+        std::copy_n(tight.planes.data[p] + row * tight.planes.stride_bytes[p], row_bytes[p],
                     padded.begin() + offsets[p] + row * (row_bytes[p] + 64));
-      strided.yuv.data[p] = padded.data() + offsets[p];
-      strided.yuv.stride_bytes[p] = row_bytes[p] + 64;
+      strided.planes.data[p] = padded.data() + offsets[p];
+      strided.planes.stride_bytes[p] = row_bytes[p] + 64;
     }
     std::string error;
     for (const bool plain : {false, true}) {
@@ -145,6 +148,86 @@ TEST_F(GpuTest, YuvConversionHoldsOnThePlain8BitPathForOddSizesAndPaddedRows) {
       ASSERT_TRUE(texture.upload(strided, error)) << error;
       EXPECT_EQ(maxDifference(readTexture(texture.texture(), 101, 37), from_tight), 0) << "padding leaked in";
     }
+  }
+}
+
+// A copy of `frame` whose plane rows are padded by `padding_bytes` (filled
+// with 0xAB), as cameras allocate them; the copy's planes live in `storage`.
+FrameBuffer withPaddedRows(const FrameBuffer& frame, int padding_bytes, std::vector<std::uint8_t>& storage) {
+  const int plane_count = planeCount(frame.layout);
+  const int chroma_height = (frame.height_px + 1) / 2;
+  int offsets[3] = {0, 0, 0}, heights[3] = {frame.height_px, chroma_height, chroma_height};
+  storage.clear();
+  for (int p = 0; p < plane_count; ++p) {
+    offsets[p] = static_cast<int>(storage.size());
+    storage.resize(storage.size() + static_cast<std::size_t>((frame.planes.stride_bytes[p] + padding_bytes) * heights[p]),
+                   0xAB);
+  }
+  FrameBuffer padded = frame;
+  for (int p = 0; p < plane_count; ++p) {
+    const int row_bytes = frame.planes.stride_bytes[p];
+    for (int row = 0; row < heights[p]; ++row)
+      std::copy_n(frame.planes.data[p] + row * row_bytes, row_bytes,
+                  storage.begin() + offsets[p] + row * (row_bytes + padding_bytes));
+    padded.planes.data[p] = storage.data() + offsets[p];
+    padded.planes.stride_bytes[p] = row_bytes + padding_bytes;
+  }
+  return padded;
+}
+
+const PixelLayout kCameraLayouts[] = {PixelLayout::kI420,   PixelLayout::kNv12,   PixelLayout::kYuyv,
+                                      PixelLayout::kRgb888, PixelLayout::kBgr888, PixelLayout::kXrgb8888};
+
+// Every layout a camera may offer (issue 17), through the GPU, against the
+// image it was encoded from: odd sizes, rows padded by a number of bytes
+// that is no whole number of RGB pixels (so the packed rows go one by one
+// even with GL_EXT_unpack_subimage), and without any extension.
+TEST_F(GpuTest, EveryCameraLayoutConvertsToTheRgbItCameFrom) {
+  const ImageRGB8 image = flatPatchImage(101, 37, 6, 13);
+  for (const PixelLayout layout : kCameraLayouts) {
+    SCOPED_TRACE(layoutName(layout));
+    FrameBuffer frame;
+    encodeSimFrame(image, layout, frame);
+    std::vector<std::uint8_t> storage;
+    const FrameBuffer padded = withPaddedRows(frame, 50, storage);
+    for (const bool plain : {false, true}) {
+      SCOPED_TRACE(plain ? "extensions masked" : "all extensions");
+      passes::CameraFrameTexture texture;
+      std::string error;
+      ASSERT_TRUE(texture.init(plain ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities(), error))
+          << error;
+      const FrameBuffer* inputs[] = {&frame, &padded};
+      for (const FrameBuffer* input : inputs) {
+        ASSERT_TRUE(texture.upload(*input, error)) << error;
+        EXPECT_EQ(texture.lastPath(), isYuv(layout) ? passes::FrameUploadPath::kYuvUpload
+                                                    : passes::FrameUploadPath::kPackedRgbUpload);
+        const ImageRGB8 converted = readTexture(texture.texture(), 101, 37);
+        if (isYuv(layout))
+          EXPECT_LE(maxDifferenceInsidePatches(converted, image, 6, layout == PixelLayout::kYuyv ? 2 : 1),
+                    kRoundingTolerance);
+        else  // bytes in, bytes out: each texel's centre is sampled exactly
+          EXPECT_EQ(maxDifference(converted, image), 0);
+      }
+    }
+  }
+}
+
+// The GPU against the CPU's own decoding (FrameBuffer::toRgb, what the
+// tag's border and the ball's pixels are read with) on an image with no
+// flat areas: YUYV's chroma interpolation between co-sited samples and the
+// packed byte orders must agree pixel for pixel, to the one code that
+// float rounding on either side can move a result.
+TEST_F(GpuTest, PackedLayoutsConvertOnTheGpuAsTheCpuReferenceDoes) {
+  const ImageRGB8 image = flatPatchImage(67, 29, 1, 17);  // every pixel its own colour
+  passes::CameraFrameTexture texture;
+  std::string error;
+  ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
+  for (const PixelLayout layout : {PixelLayout::kYuyv, PixelLayout::kRgb888, PixelLayout::kBgr888, PixelLayout::kXrgb8888}) {
+    SCOPED_TRACE(layoutName(layout));
+    FrameBuffer frame;
+    encodeSimFrame(image, layout, frame);
+    ASSERT_TRUE(texture.upload(frame, error)) << error;
+    EXPECT_LE(maxDifference(readTexture(texture.texture(), 67, 29), frame.toRgb()), layout == PixelLayout::kYuyv ? 1 : 0);
   }
 }
 
@@ -224,11 +307,11 @@ TEST_F(GpuTest, BrokenI420FramesAreRefusedWithAReason) {
   std::string error;
   ASSERT_TRUE(texture.init(test::sharedCapabilities(), error)) << error;
   FrameBuffer frame = yuvFrame(flatPatchImage(64, 48, 2, 1));
-  frame.yuv.data[2] = nullptr;
+  frame.planes.data[2] = nullptr;
   EXPECT_FALSE(texture.upload(frame, error));
   EXPECT_NE(error.find("planes"), std::string::npos) << error;
   frame = yuvFrame(flatPatchImage(64, 48, 2, 1));
-  frame.yuv.stride_bytes[0] = 10;  // shorter than a row
+  frame.planes.stride_bytes[0] = 10;  // shorter than a row
   EXPECT_FALSE(texture.upload(frame, error));
   EXPECT_NE(error.find("stride"), std::string::npos) << error;
 }
