@@ -19,6 +19,8 @@ packages=(
   # tests and benchmarks (systemd-analyze checks the unit file; assimp-testmodels:
   # the assimp project's glTF 2.0 files, valid and broken, read where Debian puts them)
   libgtest-dev libbenchmark-dev systemd assimp-testmodels
+  # Debian's package checker, run on the .deb by scripts/check-package.sh
+  lintian
   # the sanitizer build and the libFuzzer targets (scripts/test-sanitizers.sh)
   clang libclang-rt-14-dev
 )

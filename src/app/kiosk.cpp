@@ -282,15 +282,21 @@ class Kiosk {
       return Status::runtimeFailure(error);
     capabilities_ = gles::probeCapabilities();
     if (settings.maps.force_8bit) capabilities_ = capabilities_.withoutExtensions();
-    if (!options_.quiet) log_ << "probelight: " << display_->describe() << ": " << capabilities_.summary() << "\n";
     PROBELIGHT_TRY(makeStages());
     PROBELIGHT_TRY(openButtonAndLed());
     resources_ = ResourceLog(settings.resources_every_frames);
     if (!resources_.open((fs::path(options_.out_dir) / "resources.csv").string(), error))
       return Status::runtimeFailure(error);
+    // A camera that cannot give camera.yaml's size or the format asked for
+    // is a configuration problem: exit status 2, which the service's unit
+    // does not restart (a restart would only fail again).
     if (!source_->start(error))
-      return options_.source == "images" ? Status::badInput(error) : Status::runtimeFailure(error);
-    if (!options_.quiet && !source_->streamDescription().empty())
+      return options_.source == "images" || source_->refusedItsSettings() ? Status::badInput(error)
+                                                                           : Status::runtimeFailure(error);
+    // Start-up lines, logged under --quiet too (the service's journal), once
+    // every file has been read: a bad file is its one line of error alone.
+    log_ << "probelight: " << display_->describe() << ": " << capabilities_.summary() << "\n";
+    if (!source_->streamDescription().empty())
       log_ << "probelight: " << source_->name() << ": " << source_->streamDescription() << "\n";
     lights_->loadStoredLighting();
     return Status::ok();
@@ -387,8 +393,7 @@ class Kiosk {
     track_ = std::make_unique<TrackStage>(settings, inputs_.rig, inputs_.camera, report_);
     maps_ = std::make_unique<MapsStage>(settings, inputs_.rig.probe_reflectance,
                                         object.readsGlossy(glossyExponents(settings)), report_);
-    lights_ = std::make_unique<LightsStage>(settings, inputs_.rig, inputs_.camera, *source_, report_, log_,
-                                            options_.quiet);
+    lights_ = std::make_unique<LightsStage>(settings, inputs_.rig, inputs_.camera, *source_, report_, log_);
     shadows_ = std::make_unique<ShadowsStage>(settings, object.shape, report_);
     compose_ = std::make_unique<ComposeStage>(object, inputs_.camera, inputs_.rig, settings.maps.stages.camera_transfer,
                                               report_, settings.gpu_finish);
@@ -468,9 +473,8 @@ class Kiosk {
     std::ofstream out(report_path);
     out << json.dump(2) << "\n";
     if (!out) return Status::runtimeFailure("cannot write " + report_path.string());
-    if (!options_.quiet)
-      log_ << "probelight: " << frames_done_ << " frames in " << std::fixed << std::setprecision(1) << elapsed_s
-           << " s; report: " << report_path.string() << "\n";
+    log_ << "probelight: " << frames_done_ << " frames in " << std::fixed << std::setprecision(1) << elapsed_s
+         << " s; report: " << report_path.string() << "\n";
     return Status::ok();
   }
 

@@ -178,6 +178,10 @@ class FrameSource : public ExposureControl {
   // (stride 5760)"), for the log and the run report; empty when it has
   // nothing to say (replayed files).
   virtual std::string streamDescription() const { return ""; }
+  // Whether the last start() failed because the source cannot do what the
+  // settings ask (a pixel format or size the camera does not offer): a
+  // configuration problem that trying again will not fix.
+  virtual bool refusedItsSettings() const { return false; }
   // lockExposure, setExposureLadder and shortestExposureUs: ExposureControl's,
   // false or nothing where the source has no such controls.
 };

@@ -34,20 +34,30 @@ int planeFd(const Plane& plane) {
   return plane.fd.get();
 }
 
+// Sets a control the camera has; one it lacks is left out. libcamera logs
+// an ERROR for each invalid control in each request (vimc's sensor has no
+// AeEnable or AwbEnable), which would flood the journal.
+template <typename T, typename V>
+inline void setIfSupported(libcamera::ControlList& controls, const libcamera::Control<T>& control, const V& value) {
+  const libcamera::ControlInfoMap* supported = controls.infoMap();
+  if (supported != nullptr && supported->find(control.id()) == supported->end()) return;
+  controls.set(control, value);
+}
+
 // Freezes (locked) or releases auto exposure, gain and white balance. 0.5
 // split AeEnable into ExposureTimeMode and AnalogueGainMode (AeEnable stays,
 // input-only, as a shorthand for both); switching them to manual without a
 // value keeps the last values AE chose, as AeEnable false did before.
 inline void setExposureLocked(libcamera::ControlList& controls, bool locked) {
 #if LIBCAMERA_VERSION_MAJOR > 0 || LIBCAMERA_VERSION_MINOR >= 5
-  controls.set(libcamera::controls::ExposureTimeMode,
-               locked ? libcamera::controls::ExposureTimeModeManual : libcamera::controls::ExposureTimeModeAuto);
-  controls.set(libcamera::controls::AnalogueGainMode,
-               locked ? libcamera::controls::AnalogueGainModeManual : libcamera::controls::AnalogueGainModeAuto);
+  setIfSupported(controls, libcamera::controls::ExposureTimeMode,
+                 locked ? libcamera::controls::ExposureTimeModeManual : libcamera::controls::ExposureTimeModeAuto);
+  setIfSupported(controls, libcamera::controls::AnalogueGainMode,
+                 locked ? libcamera::controls::AnalogueGainModeManual : libcamera::controls::AnalogueGainModeAuto);
 #else
-  controls.set(libcamera::controls::AeEnable, !locked);
+  setIfSupported(controls, libcamera::controls::AeEnable, !locked);
 #endif
-  controls.set(libcamera::controls::AwbEnable, !locked);
+  setIfSupported(controls, libcamera::controls::AwbEnable, !locked);
 }
 
 // A fixed exposure time (microseconds) and analogue gain, AE off (0.5's
@@ -55,14 +65,14 @@ inline void setExposureLocked(libcamera::ControlList& controls, bool locked) {
 // frame's metadata says what it used.
 inline void setManualExposure(libcamera::ControlList& controls, double exposure_us, double analogue_gain) {
 #if LIBCAMERA_VERSION_MAJOR > 0 || LIBCAMERA_VERSION_MINOR >= 5
-  controls.set(libcamera::controls::ExposureTimeMode, libcamera::controls::ExposureTimeModeManual);
-  controls.set(libcamera::controls::AnalogueGainMode, libcamera::controls::AnalogueGainModeManual);
+  setIfSupported(controls, libcamera::controls::ExposureTimeMode, libcamera::controls::ExposureTimeModeManual);
+  setIfSupported(controls, libcamera::controls::AnalogueGainMode, libcamera::controls::AnalogueGainModeManual);
 #else
-  controls.set(libcamera::controls::AeEnable, false);
+  setIfSupported(controls, libcamera::controls::AeEnable, false);
 #endif
-  controls.set(libcamera::controls::ExposureTime, static_cast<std::int32_t>(std::lround(exposure_us)));
-  controls.set(libcamera::controls::AnalogueGain, static_cast<float>(analogue_gain));
-  controls.set(libcamera::controls::AwbEnable, false);
+  setIfSupported(controls, libcamera::controls::ExposureTime, static_cast<std::int32_t>(std::lround(exposure_us)));
+  setIfSupported(controls, libcamera::controls::AnalogueGain, static_cast<float>(analogue_gain));
+  setIfSupported(controls, libcamera::controls::AwbEnable, false);
 }
 
 // The shortest exposure time the camera takes (microseconds): the minimum

@@ -98,11 +98,17 @@ bool LibcameraSource::start(std::string& error) {
     error_.clear();
   }
   ++generation_;
+  settings_refused_ = false;
   if (!startCamera(error)) {
     shutDown();
     return false;
   }
   return true;
+}
+
+bool LibcameraSource::refuseSettings() {
+  settings_refused_ = true;
+  return false;
 }
 
 bool LibcameraSource::startCamera(std::string& error) {
@@ -139,7 +145,7 @@ bool LibcameraSource::startCamera(std::string& error) {
   std::vector<std::string> offered;
   for (const libcamera::PixelFormat& format : stream_config.formats().pixelformats()) offered.push_back(format.toString());
   const std::optional<CameraFormat> format = chooseCameraFormat(offered, settings_.pixel_format, camera_->id(), error);
-  if (!format) return false;
+  if (!format) return refuseSettings();
   format_ = *format;
   const CameraFormatInfo& info = cameraFormatInfo(format_);
   const libcamera::PixelFormat wanted_format = libcamera::PixelFormat::fromString(info.libcamera_name);
@@ -159,7 +165,7 @@ bool LibcameraSource::startCamera(std::string& error) {
     if (std::string problem = sizeMismatchProblem(camera_->id(), info.libcamera_name, wanted_size, *nearest);
         !problem.empty()) {
       error = problem;
-      return false;
+      return refuseSettings();
     }
   }
   stream_config.pixelFormat = wanted_format;
@@ -173,14 +179,14 @@ bool LibcameraSource::startCamera(std::string& error) {
     error = "camera: " + camera_->id() + " cannot stream " + info.libcamera_name + " at " +
             std::to_string(settings_.width_px) + "x" + std::to_string(settings_.height_px) + " (it offers " +
             stream_config.toString() + ")";
-    return false;
+    return refuseSettings();
   }
   if (std::string problem = sizeMismatchProblem(
           camera_->id(), info.libcamera_name, wanted_size,
           {static_cast<int>(stream_config.size.width), static_cast<int>(stream_config.size.height)});
       !problem.empty()) {
     error = problem;
-    return false;
+    return refuseSettings();
   }
   if (camera_->configure(config.get()) != 0) {
     error = "camera: " + camera_->id() + " refused the configuration " + stream_config.toString();

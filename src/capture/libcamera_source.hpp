@@ -75,9 +75,12 @@ class LibcameraSource final : public FrameSource {
   // The stream the camera agreed to, once started: "BGR888 1920x1080
   // (stride 5760)", for the log and the run report.
   std::string streamDescription() const override;
+  bool refusedItsSettings() const override { return settings_refused_; }
 
  private:
   struct Slot;
+  // Marks the start as failed on camera.pixel_format or camera.yaml's size.
+  bool refuseSettings();
   bool startCamera(std::string& error);
   void requestCompleted(libcamera::Request* request);
   // Re-queues a request, with the exposure controls it needs.
@@ -96,6 +99,7 @@ class LibcameraSource final : public FrameSource {
   YcbcrEncoding encoding_;
   CameraFormat format_ = CameraFormat::kYuv420;
   bool exposure_time_controllable_ = true;  // guarded by mutex_
+  bool settings_refused_ = false;
   std::string stream_description_;
   std::uint64_t undecodable_frames_ = 0;
   std::vector<std::unique_ptr<Slot>> slots_;

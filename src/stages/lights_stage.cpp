@@ -43,14 +43,13 @@ BracketSettings bracketSettings(const LightsConfig& config) {
 }  // namespace
 
 LightsStage::LightsStage(const PipelineSettings& settings, const RigGeometry& rig, const CameraIntrinsics& camera,
-                         ExposureControl& camera_control, RunReport& report, std::ostream& log, bool quiet)
+                         ExposureControl& camera_control, RunReport& report, std::ostream& log)
     : settings_(settings),
       rig_(rig),
       camera_(camera),
       camera_control_(camera_control),
       report_(report),
       log_(log),
-      quiet_(quiet),
       machine_(settings.recalibration),
       bracket_(bracketSettings(settings.lights), camera_control, report),
       transition_(settings.lights.fade_s) {}
@@ -68,8 +67,10 @@ void LightsStage::warn(const std::string& message) const {
   log_ << logPrefix(LogPriority::kWarning) << "probelight: " << message << "\n";
 }
 
+// Events (a fit, a button press, the stored lighting), not per-frame
+// lines: logged under --quiet too, so that the service's journal has them.
 void LightsStage::info(const std::string& message) const {
-  if (!quiet_) log_ << "probelight: " << message << "\n";
+  log_ << "probelight: " << message << "\n";
 }
 
 double LightsStage::clipLevel() const {

@@ -54,7 +54,7 @@ class LightsStage {
   static constexpr const char* kMergeStageName = "bracket_merge";
 
   LightsStage(const PipelineSettings& settings, const RigGeometry& rig, const CameraIntrinsics& camera,
-              ExposureControl& camera_control, RunReport& report, std::ostream& log, bool quiet);
+              ExposureControl& camera_control, RunReport& report, std::ostream& log);
   // The bracket's tag tracker: bad tracking settings are bad input.
   Status init();
   // The lighting kept from the last run (state.dir), shown from the first
@@ -137,7 +137,6 @@ class LightsStage {
   ExposureControl& camera_control_;
   RunReport& report_;
   std::ostream& log_;
-  bool quiet_;
 
   LightingStateMachine machine_;
   BracketController bracket_;

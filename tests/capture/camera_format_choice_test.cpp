@@ -39,8 +39,11 @@ TEST(CameraFormatChoice, EveryConfigNameMapsToALayoutTheGpuConverts) {
   EXPECT_EQ(names.front(), "auto");
   EXPECT_EQ(names.size(), cameraFormats().size() + 1);
   EXPECT_EQ(cameraFormatInfo(CameraFormat::kMjpeg).layout, PixelLayout::kRgb8);  // decoded on the CPU
-  for (const CameraFormatInfo& info : cameraFormats())
-    if (info.format != CameraFormat::kMjpeg) EXPECT_STREQ(layoutName(info.layout), info.libcamera_name);
+  for (const CameraFormatInfo& info : cameraFormats()) {
+    if (info.format != CameraFormat::kMjpeg) {
+      EXPECT_STREQ(layoutName(info.layout), info.libcamera_name);
+    }
+  }
 }
 
 TEST(CameraFormatChoice, TheNearestSizeFromAListOrASteppedRange) {
