@@ -19,7 +19,15 @@ CC=clang CXX=clang++ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo 
   -DPROBELIGHT_BUILD_BENCH=OFF
 cmake --build build-asan -j"$(nproc)"
 source scripts/sanitizer-options.sh
-(cd build-asan && ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --output-on-failure -j"$(nproc)" --timeout 1800)
+# Every suite but `accuracy`: its tests hold numbers against path-traced
+# truth, which the release run (scripts/test.sh) checks; the code they run
+# (the stages, the passes, analyze and run through the binary) is run here
+# by the app, stages, gles and ibl suites. Under the sanitizers the
+# simulator's path tracing is about 10x slower: the accuracy suite took
+# 1470 of the run's 3400 test-seconds (about 12 of its 28 minutes on 2
+# cores, CI of 2026-12-05), and issue 17 holds CI to 75 minutes.
+(cd build-asan && ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --output-on-failure -j"$(nproc)" --timeout 1800 \
+  --label-exclude '^accuracy$')
 if [[ $fuzz_seconds != 0 ]]; then
   scripts/fuzz.sh "$fuzz_seconds"
 fi

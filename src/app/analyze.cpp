@@ -22,6 +22,7 @@
 #include "gles/capabilities.hpp"
 #include "gles/egl_context.hpp"
 #include "gles/render_target.hpp"
+#include "capture/frame_recording.hpp"
 #include "ibl/hdr_bracket.hpp"
 #include "ibl/irradiance.hpp"
 #include "ibl/lighting_fit.hpp"
@@ -70,6 +71,10 @@ class Analyzer {
   Status run() {
     PROBELIGHT_TRY(loadInputs());
     json_["frame"] = {{"path", options_.frame_path}, {"width_px", frame_bgr_.cols}, {"height_px", frame_bgr_.rows}};
+    if (frame_.metadata.exposure_us > 0.0) {  // a recorded frame's
+      json_["frame"]["exposure_us"] = frame_.metadata.exposure_us;
+      json_["frame"]["analogue_gain"] = frame_.metadata.analogue_gain;
+    }
     PROBELIGHT_TRY(track());
     if (outcome_.isOk()) measureProbe();
     if (outcome_.isOk()) fail(makeMaps());
@@ -94,9 +99,8 @@ class Analyzer {
     settings_.lights.white_reference = settings_.lights.white_reference && options_.white_reference;
     settings_.lights.post_reference = settings_.lights.post_reference && options_.post_reference;
     std::error_code ec;
-    std::string unreadable;
-    frame_bgr_ = readImageFile(options_.frame_path, cv::IMREAD_COLOR, &unreadable);
-    if (frame_bgr_.empty()) return Status::badInput(options_.frame_path + ": " + unreadable + " (--frame)");
+    if (const std::string unreadable = readFrame(options_.frame_path, frame_, frame_bgr_); !unreadable.empty())
+      return Status::badInput(unreadable + " (--frame)");
     if (frame_bgr_.cols != camera_.width_px || frame_bgr_.rows != camera_.height_px)
       // The calibration belongs to another resolution: every pixel position
       // derived from it would be wrong.
@@ -107,9 +111,6 @@ class Analyzer {
       return Status::badInput(options_.out_dir + ": cannot create the output folder (--out)" +
                               (ec ? ": " + ec.message() : std::string()));
     PROBELIGHT_TRY(makeObject());
-    frame_.rgb = rgbFromBgr(frame_bgr_);
-    frame_.finishRgb();
-    frame_.metadata.origin = options_.frame_path;
     track_ = std::make_unique<TrackStage>(settings_, rig_, camera_, report_, /*fit_probe_edges=*/true);
     return track_->init();
   }
@@ -299,17 +300,19 @@ class Analyzer {
                              ibl::HdrMergeSettings{settings_.maps.stages.camera_transfer}, reflection_->face_size};
     Json unread = Json::array();
     std::vector<BracketCandidate> candidates;
-    for (const BracketOption& bracket : options_.brackets) {
-      std::string why;
-      const cv::Mat bgr = readImageFile(bracket.path, cv::IMREAD_COLOR, &why);
-      if (!bgr.empty() && (bgr.cols != frame_bgr_.cols || bgr.rows != frame_bgr_.rows))
+    for (BracketOption bracket : options_.brackets) {
+      FrameBuffer frame;
+      cv::Mat bgr;
+      std::string why = readFrame(bracket.path, frame, bgr);
+      if (why.empty() && (bgr.cols != frame_bgr_.cols || bgr.rows != frame_bgr_.rows))
         why = "it is " + sizeText(bgr.cols, bgr.rows) + ", --frame is " + sizeText(frame_bgr_.cols, frame_bgr_.rows);
+      if (why.empty() && bracket.ev_from_metadata) why = evFromMetadata(frame.metadata, bracket.ev);
       if (!why.empty()) {
         unread.push_back({{"frame", bracket.path}, {"ev", bracket.ev}, {"used", false}, {"reason", why}});
         warnBracket(bracket.path, bracket.ev, why);
         continue;
       }
-      candidates.push_back({bracket.path, bracket.ev, rgbFromBgr(bgr)});
+      candidates.push_back({bracket.path, bracket.ev, std::move(frame.rgb)});
     }
     BracketMergeResult merged =
         mergeBracketProbe(frame_.rgb, std::move(candidates), setup,
@@ -330,6 +333,42 @@ class Analyzer {
     hdr["status"] = merged.status;
     hdr["still_clipped_sr"] = merged.still_clipped_sr;
     hdr["ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  // An image file, or a recorded frame (run --record) decoded from the
+  // camera's layout as the GPU decodes it (FrameBuffer::toRgb, its CPU
+  // reference), its metadata kept. "" when read; otherwise why not, naming
+  // the file.
+  static std::string readFrame(const std::string& path, FrameBuffer& frame, cv::Mat& bgr) {
+    if (isRecordedFramePath(path)) {
+      FrameBuffer recorded;
+      if (const Status status = readRecordedFrame(path, recorded); !status.isOk()) return status.message();
+      frame.rgb = recorded.toRgb();
+      frame.metadata = recorded.metadata;
+    } else {
+      std::string why;
+      const cv::Mat read = readImageFile(path, cv::IMREAD_COLOR, &why);
+      if (read.empty()) return path + ": " + why;
+      frame.rgb = rgbFromBgr(read);
+      frame.metadata.origin = path;
+    }
+    frame.finishRgb();
+    bgr = bgrFromRgb(frame.rgb);
+    return "";
+  }
+
+  // A recorded bracket frame's EV from --frame's: their exposures (time x
+  // gain) as the metadata says. Why not, when it cannot be told or is out
+  // of --bracket's range.
+  std::string evFromMetadata(const FrameMetadata& bracket, double& ev) const {
+    const FrameMetadata& base = frame_.metadata;
+    if (!(bracket.exposure_us > 0.0) || !(base.exposure_us > 0.0))
+      return "its metadata or --frame's has no exposure: give it as FILE@EV";
+    auto product = [](const FrameMetadata& m) { return m.exposure_us * (m.analogue_gain > 0.0 ? m.analogue_gain : 1.0); };
+    ev = std::log2(product(bracket) / product(base));
+    if (!(std::abs(ev) >= kMinBracketEv && std::abs(ev) <= kMaxBracketEv))
+      return "its exposure is " + formatFixed(ev, 2) + " stops from --frame's (0.125 to 24 either way is a bracket)";
+    return "";
   }
 
   void warnBracket(const std::string& path, double ev, const std::string& why) const {

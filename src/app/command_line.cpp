@@ -1,8 +1,10 @@
 #include "app/command_line.hpp"
+#include "capture/frame_recording.hpp"
 
 #include <CLI/CLI.hpp>
 
 #include <charconv>
+#include <filesystem>
 #include <limits>
 #include <cmath>
 #include <deque>
@@ -65,9 +67,12 @@ std::vector<double> parseNumberList(const std::string& flag, const std::string& 
 // FILE@EV, the EV after the last '@' (a file name may hold one too).
 BracketOption parseBracket(const std::string& flag, const std::string& text) {
   const std::size_t at = text.rfind('@');
+  // A recorded frame says its own exposure: its EV comes from the two
+  // frames' metadata (analyze checks it then).
+  if (at == std::string::npos && isRecordedFramePath(text)) return {text, 0.0, true};
   if (at == std::string::npos || at == 0 || at + 1 == text.size())
     throw UsageError("flag " + flag + ": expected FILE@EV (the same view, EV stops from --frame's exposure, e.g. "
-                     "under3.png@-3), got '" + text + "'");
+                     "under3.png@-3; a recorded frame's .json alone), got '" + text + "'");
   BracketOption bracket;
   bracket.path = text.substr(0, at);
   bracket.ev = parseNumberList(flag, text.substr(at + 1), 1, false, "FILE@EV with EV a number of stops")[0];
@@ -272,10 +277,17 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
   auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
   parseFlags(
       args, kRun,
-      {{"--source", "sim|images|libcamera",
-        "frame source (default sim: the simulated world; images: files; libcamera: the camera)",
-        [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images", "libcamera"}); options.source = v; }},
+      {{"--source", "sim|images|libcamera|recording",
+        "frame source (default sim: the simulated world; images: files; libcamera: the camera; recording: "
+        "frames made by --record, as the camera gave them)",
+        [&](auto& f, auto& v) { requireChoice(f, v, {"sim", "images", "libcamera", "recording"}); options.source = v; }},
        {"--images", "FOLDER_OR_GLOB", "files to replay with --source images", into(options.images)},
+       {"--recording", "DIR", "the recording to replay with --source recording (its camera.yaml and rig.yaml are the defaults)",
+        into(options.recording_dir)},
+       {"--record", "DIR",
+        "write every camera frame as it came (its planes, exposure, gain, timestamp, format) to DIR, with "
+        "camera.yaml and rig.yaml, for --source recording and analyze",
+        into(options.record_dir)},
        {"--camera", "camera.yaml", "camera calibration (sim: overrides the simulated camera)", into(options.camera_path)},
        {"--rig", "rig.yaml", "tag and mirror-ball geometry (sim: overrides the simulated rig)", into(options.rig_path)},
        {"-c,--config", "probelight.yaml", "pipeline settings (see board/probelight.yaml)", into(options.config_path)},
@@ -306,6 +318,16 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
     throw UsageError("flag --source images needs --camera camera.yaml (the calibration of the camera that took them)");
   if (options.source == "images" && options.rig_path.empty())
     throw UsageError("flag --source images needs --rig rig.yaml");
+  if (options.source == "recording") {
+    if (options.recording_dir.empty()) throw UsageError("flag --source recording needs --recording DIR (made by --record)");
+    // A recording carries the calibration and rig it was seen through.
+    if (options.camera_path.empty()) options.camera_path = (std::filesystem::path(options.recording_dir) / "camera.yaml").string();
+    if (options.rig_path.empty()) options.rig_path = (std::filesystem::path(options.recording_dir) / "rig.yaml").string();
+  }
+  if (!options.recording_dir.empty() && options.source != "recording")
+    throw UsageError("flag --recording: only with --source recording");
+  if (!options.record_dir.empty() && options.record_dir == options.recording_dir)
+    throw UsageError("flag --record: not the folder being replayed (--recording)");
   if (options.source == "libcamera" && options.camera_path.empty())
     throw UsageError("flag --source libcamera needs --camera camera.yaml (its calibration, at the size to stream)");
   if (options.source == "libcamera" && options.rig_path.empty())
@@ -319,14 +341,17 @@ namespace {
 // the results go, and how the light is read.
 std::vector<ValuedFlag> frameFlags(AnalyzeOptions& options, const std::string& out_description) {
   auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
-  return {{"-f,--frame", "FILE", "the camera frame: PNG, JPEG, ... (required)", into(options.frame_path)},
+  return {{"-f,--frame", "FILE",
+           "the camera frame: PNG, JPEG, ..., or a recorded one (DIR/frame_NNNNNN.json from run --record) (required)",
+           into(options.frame_path)},
           {"--camera", "camera.yaml", "the calibration of the camera that took it (required)", into(options.camera_path)},
           {"--rig", "rig.yaml", "tag and mirror-ball geometry (required)", into(options.rig_path)},
           {"-o,--out", "DIR", out_description + " (required)", into(options.out_dir)},
           {"-c,--config", "probelight.yaml", "pipeline settings (optional, see board/probelight.yaml)",
            into(options.config_path)},
           {"--bracket", "FILE@EV",
-           "the same view EV stops from --frame's exposure, e.g. under3.png@-3, merged into HDR light",
+           "the same view EV stops from --frame's exposure, e.g. under3.png@-3, merged into HDR light (a recorded "
+           "frame's EV comes from its metadata)",
            [&options](auto& f, auto& v) { options.brackets.push_back(parseBracket(f, v)); }, true}};
 }
 
@@ -339,6 +364,15 @@ std::vector<Switch> lightSwitches(AnalyzeOptions& options) {
 
 }  // namespace
 
+// A recorded frame's folder holds the calibration and rig it was seen
+// through (run --record): the defaults for --camera and --rig.
+static void defaultToTheRecordingsFiles(AnalyzeOptions& options) {
+  if (options.frame_path.empty() || !isRecordedFramePath(options.frame_path)) return;
+  const std::filesystem::path dir = std::filesystem::path(options.frame_path).parent_path();
+  if (options.camera_path.empty()) options.camera_path = (dir / "camera.yaml").string();
+  if (options.rig_path.empty()) options.rig_path = (dir / "rig.yaml").string();
+}
+
 // Each bracket frame is decoded and kept while merging: 40 of them is a
 // mistake (a glob gone wide), not a bracket; the kiosk's own has 5.
 static void checkBracketCount(const AnalyzeOptions& options) {
@@ -350,6 +384,7 @@ static void checkBracketCount(const AnalyzeOptions& options) {
 AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
   AnalyzeOptions options;
   parseFlags(args, kAnalyze, frameFlags(options, "where analysis.json and the pictures go"), lightSwitches(options));
+  defaultToTheRecordingsFiles(options);
   // No defaults for these: analysing a frame with some other camera's
   // calibration, or writing over someone's folder, gives plausible nonsense.
   if (options.frame_path.empty()) throw UsageError("analyze needs --frame FILE (the camera frame to analyse)");
@@ -411,6 +446,7 @@ RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
        }}};
   valued.insert(valued.end(), object_flags.begin(), object_flags.end());
   parseFlags(args, kRender, valued, lightSwitches(options.frame));
+  defaultToTheRecordingsFiles(options.frame);
   if (options.frame.frame_path.empty()) throw UsageError("render needs --frame FILE (the camera frame)");
   if (options.frame.camera_path.empty()) throw UsageError("render needs --camera camera.yaml (the calibration of the camera that took it)");
   if (options.frame.rig_path.empty()) throw UsageError("render needs --rig rig.yaml");

@@ -31,8 +31,10 @@ struct HelpRequested {
 
 // Flags of `probelight run`. Empty strings mean "not given".
 struct RunOptions {
-  std::string source = "sim";         // sim | images
+  std::string source = "sim";         // sim | images | libcamera | recording
   std::string images;                 // folder or glob, for --source images
+  std::string recording_dir;          // --recording: for --source recording
+  std::string record_dir;             // --record: every camera frame goes here
   std::string display = "headless";   // headless (kms comes with the board issue)
   std::string button = "none";        // none | key
   std::string key_path = "-";         // stdin or a FIFO, for --button key
@@ -60,6 +62,9 @@ RunOptions parseRunOptions(const std::vector<std::string>& args);
 struct BracketOption {
   std::string path;
   double ev = 0.0;
+  // A recorded frame given without @EV: its EV is from its and --frame's
+  // exposure metadata.
+  bool ev_from_metadata = false;
 };
 // Bounds on --bracket (command_line.cpp says why).
 inline constexpr double kMinBracketEv = 0.125;

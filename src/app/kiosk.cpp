@@ -15,8 +15,10 @@
 #include "app/resource_log.hpp"
 #include "app/service_notify.hpp"
 #include "app/shutdown_request.hpp"
+#include "capture/frame_recorder.hpp"
 #include "capture/image_frame_source.hpp"
 #include "capture/libcamera_source.hpp"
+#include "capture/recording_frame_source.hpp"
 #include "capture/rgb_image_io.hpp"
 #include "capture/scheduled_camera_loss.hpp"
 #include "capture/sim_frame_source.hpp"
@@ -120,6 +122,7 @@ class Kiosk {
       if (event == CameraEvent::kFailed) return Status::badInput(source_->name() + ": " + source_->lastError());
       if (event == CameraEvent::kLost) lights_->onCameraLost();
       if (event != CameraEvent::kFrame) continue;
+      recordFrame(*lease);
       FrameContext ctx(*lease, frames_done_++);
       ctx.frames_since_camera_start = camera_->framesSinceStart();
       PROBELIGHT_TRY(processFrame(ctx));
@@ -274,6 +277,7 @@ class Kiosk {
     // message; --out holds report.json whichever the display.
     PROBELIGHT_TRY(createFolder(options_.out_dir, "--out"));
     if (!options_.capture_dir.empty()) PROBELIGHT_TRY(createFolder(options_.capture_dir, "--capture"));
+    PROBELIGHT_TRY(checkRecordingFolder());
     PROBELIGHT_TRY(makeSource());
     const AppSettings& settings = inputs_.settings;
     std::string error;
@@ -293,6 +297,7 @@ class Kiosk {
     if (!source_->start(error))
       return options_.source == "images" || source_->refusedItsSettings() ? Status::badInput(error)
                                                                            : Status::runtimeFailure(error);
+    PROBELIGHT_TRY(beginRecording());
     // Start-up lines, logged under --quiet too (the service's journal), once
     // every file has been read: a bad file is its one line of error alone.
     log_ << "probelight: " << display_->describe() << ": " << capabilities_.summary() << "\n";
@@ -306,6 +311,8 @@ class Kiosk {
     const AppSettings& settings = inputs_.settings;
     if (options_.source == "images") {
       source_ = std::make_unique<ImageFrameSource>(options_.images);
+    } else if (options_.source == "recording") {
+      source_ = std::make_unique<RecordingFrameSource>(options_.recording_dir);
     } else if (options_.source == "libcamera") {
       LibcameraSettings camera;
       camera.camera_id = settings.camera.id;
@@ -324,7 +331,8 @@ class Kiosk {
                                                       static_cast<std::uint64_t>(settings.faults.camera_loss_every_frames),
                                                       settings.faults.camera_loss_failed_restarts);
     camera_ = std::make_unique<CameraLink>(*source_, settings.camera.reconnect_max_interval_s,
-                                           options_.source != "images" || losses_injected, report_, log_);
+                                           (options_.source != "images" && options_.source != "recording") || losses_injected,
+                                           report_, log_);
     return Status::ok();
   }
 
@@ -435,6 +443,64 @@ class Kiosk {
 
   // --- what the run leaves -----------------------------------------------------
 
+  // --record DIR: made now, and refused when it already holds a recording
+  // (written over, frame by frame, it would be lost).
+  Status checkRecordingFolder() {
+    if (options_.record_dir.empty()) return Status::ok();
+    PROBELIGHT_TRY(createFolder(options_.record_dir, "--record"));
+    std::error_code ec;
+    if (fs::exists(fs::path(options_.record_dir) / kRecordingHeaderFile, ec) ||
+        !listRecordedFrames(options_.record_dir).empty())
+      return Status::badInput(options_.record_dir + ": already holds a recording (--record): record into a new folder");
+    return Status::ok();
+  }
+
+  // Once the camera has started: what it is, and the calibration and rig
+  // its frames are seen through, so that the recording replays alone.
+  Status beginRecording() {
+    if (options_.record_dir.empty()) return Status::ok();
+    const fs::path dir = options_.record_dir;
+    try {
+      config::saveCameraFile((dir / "camera.yaml").string(), inputs_.camera);
+      config::saveRigFile((dir / "rig.yaml").string(), inputs_.rig);
+    } catch (const config::ConfigError& error) {
+      return Status::runtimeFailure(std::string(error.what()) + " (--record)");
+    }
+    RecordingHeader header;
+    header.source = source_->name();
+    header.stream = source_->streamDescription();
+    header.exposure_control = source_->takesExposureLadders();
+    header.shortest_exposure_us = source_->shortestExposureUs();
+    recorder_ = std::make_unique<FrameRecorder>(options_.record_dir);
+    if (std::string error; !recorder_->begin(header, error)) return Status::runtimeFailure(error + " (--record)");
+    return Status::ok();
+  }
+
+  // A recording that cannot be written (a full card) ends there, said once;
+  // the kiosk goes on.
+  void recordFrame(const FrameBuffer& frame) {
+    if (!recorder_ || recorder_->stopped()) return;
+    if (std::string error; !recorder_->record(frame, error))
+      log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << error
+           << " (--record): recording stopped; the kiosk goes on\n";
+  }
+
+  // The recording's section of the report, once its writes are done.
+  void finishRecording(nlohmann::json& extra) {
+    if (!recorder_) return;
+    std::string error;
+    const bool ok = recorder_->finish(error);
+    nlohmann::json& section = extra["recording"];
+    section = {{"dir", recorder_->dir()},
+               {"frames_written", recorder_->framesWritten()},
+               {"bytes_queued", recorder_->bytesRecorded()}};
+    if (!ok) {
+      section["error"] = error;
+      if (!recorder_->stopped())  // not said yet: the failed write was among the last
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << error << " (--record)\n";
+    }
+  }
+
   // --capture DIR: the last frame the pipeline ran on as the camera gave it
   // (frame.png), with the calibration and rig it was seen through, so that
   // `analyze` and `render` can be run on it.
@@ -456,6 +522,7 @@ class Kiosk {
   Status writeReport(double elapsed_s) {
     nlohmann::json& extra = report_.extra;
     extra["source"] = source_->name();
+    finishRecording(extra);
     extra["display"] = display_->describe();
     extra["gl"] = capabilities_.summary();
     // Each stage's own sections; the camera's is shared by the link (losses,
@@ -511,6 +578,7 @@ class Kiosk {
   tracking::TagTrackResult last_track_;  // redrawn over the last frame while it is kept
   std::uint64_t last_frame_number_ = 0;
   ImageRGB8 last_pipeline_frame_;  // --capture only
+  std::unique_ptr<FrameRecorder> recorder_;  // --record only
   // The status the display's frame was last drawn with as a kept frame
   // (reset by every drawing): a kept frame with the same status is shown
   // again without drawing it.

@@ -44,6 +44,9 @@ class ExposureControl {
   // The sensor's shortest exposure time (microseconds), where the source
   // knows it: a ladder's rungs below it would all be taken at it.
   virtual std::optional<double> shortestExposureUs() const { return std::nullopt; }
+  // Whether setExposureLadder takes a ladder (once started): what a
+  // recording says of its camera, so that its replay does the same.
+  virtual bool takesExposureLadders() const { return false; }
 };
 
 }  // namespace probelight

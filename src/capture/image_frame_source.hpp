@@ -43,6 +43,7 @@ class ImageFrameSource : public ThreadedFrameSource {
   // Exposure control, where the replay has exposure sets (false otherwise).
   bool lockExposure(bool locked) override;
   bool setExposureLadder(const std::vector<ManualExposure>& per_frame) override;
+  bool takesExposureLadders() const override { return !exposureSets().empty(); }
 
  protected:
   // Lists the files; fails with one line when none match.

@@ -319,6 +319,11 @@ bool LibcameraSource::setExposureLadder(const std::vector<ManualExposure>& per_f
   return true;
 }
 
+bool LibcameraSource::takesExposureLadders() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return exposure_time_controllable_;
+}
+
 std::optional<double> LibcameraSource::shortestExposureUs() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return shortest_exposure_us_;

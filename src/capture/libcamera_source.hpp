@@ -70,6 +70,7 @@ class LibcameraSource final : public FrameSource {
   bool setExposureLadder(const std::vector<ManualExposure>& per_frame) override;
   // The minimum of the camera's ExposureTime control, once started.
   std::optional<double> shortestExposureUs() const override;
+  bool takesExposureLadders() const override;
   // The stream's colour encoding as the camera agreed it.
   YcbcrEncoding encoding() const { return encoding_; }
   // The stream the camera agreed to, once started: "BGR888 1920x1080

@@ -31,6 +31,7 @@ class ScheduledCameraLoss : public FrameSource {
     return inner_->setExposureLadder(per_frame);
   }
   std::optional<double> shortestExposureUs() const override { return inner_->shortestExposureUs(); }
+  bool takesExposureLadders() const override { return inner_->takesExposureLadders(); }
 
   std::uint64_t lossesInjected() const { return losses_; }
 

@@ -68,6 +68,7 @@ class SimFrameSource : public ThreadedFrameSource {
   // dropped), so every rung arrives in order.
   bool setExposureLadder(const std::vector<ManualExposure>& per_frame) override;
   std::optional<double> shortestExposureUs() const override;
+  bool takesExposureLadders() const override { return options_.exposure_controllable; }
 
  protected:
   bool prepare(std::string& error) override;

@@ -54,11 +54,19 @@ HdrMergeResult mergeBracket(const std::vector<BracketFrame>& frames, const HdrMe
     if (frames[f].ev > frames[longest].ev) longest = f;
   }
   const size_t pixel_count = static_cast<size_t>(width) * static_cast<size_t>(height);
+  // A pixel with any channel clipped counts in none: a camera's colour
+  // matrix mixes its channels, and a clipped Y' decodes through the chroma
+  // to channels below the clip (probe_to_cube.cpp says more).
+  auto clipped = [&](size_t f, size_t i) {
+    const std::uint8_t* code = &frames[f].image->pixels[3 * i];
+    return std::max({code[0], code[1], code[2]}) >= settings.clip_code;
+  };
   for (size_t i = 0; i < pixel_count; ++i) {
     glm::vec3 merged(0.0f);
     for (int c = 0; c < 3; ++c) {
       double weighted = 0.0, weight_sum = 0.0;
       for (size_t f = 0; f < frames.size(); ++f) {
+        if (clipped(f, i)) continue;
         const int code = frames[f].image->pixels[3 * i + static_cast<size_t>(c)];
         const double weight = hatWeight(code, settings) * ratios[f];
         weighted += weight * linear[static_cast<size_t>(code)] / ratios[f];
@@ -69,7 +77,7 @@ HdrMergeResult mergeBracket(const std::vector<BracketFrame>& frames, const HdrMe
         continue;
       }
       const int short_code = frames[shortest].image->pixels[3 * i + static_cast<size_t>(c)];
-      if (short_code >= settings.clip_code) {
+      if (clipped(shortest, i)) {
         merged[c] = static_cast<float>(linear[static_cast<size_t>(short_code)] / ratios[shortest]);
         result.still_clipped[i] = 1;
       } else {

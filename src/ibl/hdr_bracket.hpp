@@ -50,8 +50,9 @@ std::string bracketProblem(const std::vector<BracketFrame>& frames);
 
 // The merge. Weight of a code c: the hat min(c - dark, clip - c), zero
 // outside (dark, clip), times the frame's exposure ratio (a longer
-// exposure measures the same radiance with less relative noise). A channel
-// no frame measured takes the shortest exposure's value if it clipped there
+// exposure measures the same radiance with less relative noise); nothing
+// from a frame where any channel of the pixel clipped. A channel no frame
+// measured takes the shortest exposure's value if the pixel clipped there
 // (a lower bound, flagged in still_clipped), else the longest's (dark).
 HdrMergeResult mergeBracket(const std::vector<BracketFrame>& frames, const HdrMergeSettings& settings);
 

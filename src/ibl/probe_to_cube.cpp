@@ -199,8 +199,12 @@ CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMer
       reference, params,
       [&](const glm::dvec3& direction_w, bool& lower_bound) -> std::optional<glm::dvec3> {
         // Per frame and channel: the bilinear value, counted only where none
-        // of the four pixels clipped in that channel (so a clipped sun pixel
-        // never hides behind its neighbours), weighted by the bilinear hat
+        // of the four pixels clipped in any channel (so a clipped sun pixel
+        // never hides behind its neighbours; and a pixel with one channel
+        // clipped has the others wrong as well: a camera's colour matrix
+        // mixes its channels, and a clipped Y' decodes through the chroma to
+        // channels below the clip, 244 of red for a white sun in NV12),
+        // weighted by the bilinear hat
         // weights times the exposure ratio (so pixels lost in the noise
         // count little, and nothing when all four are).
         glm::dvec3 sum(0.0), weight_sum(0.0);
@@ -222,7 +226,7 @@ CubeMapRGB bracketToCubeMap(const std::vector<BracketView>& frames, const HdrMer
             bool measured = true;
             for (int k = 0; k < 4; ++k) {
               if (t.share[k] <= 0.0) continue;
-              measured = measured && !clippedAt(f, t.index[k], c);
+              measured = measured && !anyClippedAt(f, t.index[k]);
               value += t.share[k] * linearAt(f, t.index[k], c);
               weight += t.share[k] * hatAt(f, t.index[k], c);
             }

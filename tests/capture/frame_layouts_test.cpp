@@ -9,18 +9,12 @@
 
 #include "capture/frame_source.hpp"
 #include "capture/sim_frame_source.hpp"
+#include "random_image.hpp"
 
 namespace probelight {
 namespace {
 
-ImageRGB8 randomImage(int width, int height, unsigned seed) {
-  std::mt19937 random(seed);
-  std::uniform_int_distribution<int> code(0, 255);
-  ImageRGB8 image;
-  image.resize(width, height);
-  for (auto& c : image.pixels) c = static_cast<std::uint8_t>(code(random));
-  return image;
-}
+using testing::randomImage;
 
 TEST(FrameLayouts, PackedRgbBytesAreReadInTheirFormatsOrder) {
   const ImageRGB8 image = randomImage(31, 9, 1);

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "ibl/color_transfer.hpp"
+#include "ibl/hdr_bracket.hpp"
 #include "ibl_test_helpers.hpp"
 
 namespace probelight::ibl {
@@ -161,6 +162,65 @@ TEST(ProbeToCube, ABracketFromAMovingCameraIsMergedThroughEachFramesPose) {
   // exposed; bilinear reads of a smooth sky add far less.
   EXPECT_LT(worst_registered, 0.03);
   EXPECT_GT(worst_unregistered, 0.5) << "6 px of motion must show when it is not undone";
+}
+
+}  // namespace
+}  // namespace probelight::ibl
+
+namespace probelight::ibl {
+namespace {
+
+// A camera that clips in one channel has its others wrong too: decoded from
+// NV12, a clipped white lamp (Y' 255, chroma near neutral) comes out as
+// (244, 255, 255): red below the clip. Counted as a measurement, that red
+// (0.9 of the reference's white) would stand for a lamp of 40 in the merge
+// and turn it cyan. A pixel with any channel clipped gives nothing in any
+// channel: the lamp's red comes from the shorter frames, as its green does.
+TEST(ProbeToCube, APixelClippedInOneChannelCountsInNone) {
+  const MirrorBallView view = testing::kioskBallView(0.40, {400.0, 200.0});
+  const std::vector<double> evs = {0.0, -3.0, -6.0, -9.0};
+  std::vector<ImageRGB8> images;
+  for (const double ev : evs) images.push_back(exposeBall(view, ev));
+  int decoded_below_clip = 0;
+  for (ImageRGB8* image : {&images[0], &images[1]})  // where the lamp clips
+    for (std::size_t i = 0; i < image->pixels.size(); i += 3)
+      if (image->pixels[i + 1] == 255) {
+        image->pixels[i] = 244;
+        ++decoded_below_clip;
+      }
+  ASSERT_GT(decoded_below_clip, 50);
+  std::vector<BracketView> frames;
+  for (std::size_t i = 0; i < evs.size(); ++i) frames.push_back({&images[i], evs[i], view});
+  ProbeToCubeParams params;
+  params.face_size = 32;
+  params.samples_per_axis = 1;
+  const CubeMapRGB cube = bracketToCubeMap(frames, HdrMergeSettings{}, params, nullptr);
+  const glm::dvec3 lamp_direction = glm::normalize(glm::dvec3(0.2, -0.9, 0.4));
+  double worst_red = 0.0;
+  int lamp_texels = 0;
+  for (int face = 0; face < kCubeFaceCount; ++face)
+    for (int y = 0; y < params.face_size; ++y)
+      for (int x = 0; x < params.face_size; ++x) {
+        const glm::dvec3 w = cubeTexelCenterDirection(face, x, y, params.face_size);
+        if (glm::degrees(testing::angleBetweenRad(w, lamp_direction)) > 9.0) continue;  // inside the lamp
+        ++lamp_texels;
+        worst_red = std::max(worst_red, std::abs(cube.texel(face, x, y).r / 40.0 - 1.0));
+      }
+  ASSERT_GT(lamp_texels, 5);
+  // As ABracketFromAMovingCameraIsMergedThroughEachFramesPose: half a code
+  // of rounding in the frame that measured it.
+  EXPECT_LT(worst_red, 0.03) << "the lamp's red is measured at EV -6 and -9, not read off 244";
+
+  // The same for the image merge (hdr_bracket.hpp): a one-pixel bracket.
+  ImageRGB8 long_frame, short_frame;
+  long_frame.resize(1, 1);
+  short_frame.resize(1, 1);
+  long_frame.pixels = {244, 255, 255};
+  short_frame.pixels = {137, 137, 137};  // 4.0 at EV -3: sRGB 0.5 of 1
+  const HdrMergeResult merged = mergeBracket({{&long_frame, 0.0}, {&short_frame, -3.0}}, HdrMergeSettings{});
+  const double expected = srgbToLinear(137 / 255.0) * 8.0;
+  EXPECT_NEAR(merged.linear.at(0, 0).r, expected, 0.02 * expected);
+  EXPECT_NEAR(merged.linear.at(0, 0).g, expected, 0.02 * expected);
 }
 
 }  // namespace

@@ -147,7 +147,7 @@ host_request verify screen-sim screen-matches sim sim-headless/frame_000040.png 
 timed_step "2. the camera path, headless, as the service's user"
 runuser -u probelight -- /usr/bin/probelight run --config /etc/probelight/probelight.yaml \
   --camera /etc/probelight/camera.yaml --rig /etc/probelight/rig.yaml --source libcamera --display headless \
-  --frames 10 --save-every 10 --out /tmp/camera-run >"$out/camera-run.txt" 2>&1
+  --frames 10 --save-every 10 --out /tmp/camera-run --record /tmp/camera-recording >"$out/camera-run.txt" 2>&1
 camera_status=$?
 mkdir -p "$out/camera-run"
 cp /tmp/camera-run/report.json /tmp/camera-run/*.png "$out/camera-run/" 2>/dev/null
@@ -155,6 +155,41 @@ sync
 pass_if camera-run "probelight run --source libcamera: exit $camera_status; $(grep -m 1 '^probelight: libcamera' "$out/camera-run.txt")" \
   test "$camera_status" -eq 0
 host_request verify camera-report camera-report camera-run/report.json 10
+# The run recorded vimc's frames as they came (--record): replayed on their
+# own (the recording's camera.yaml and rig.yaml), they make the same
+# pictures; and analyze takes one (vimc's test pattern has no tag: exit 3,
+# with analysis.json saying so and the frame's size and exposure).
+recorded=$(find /tmp/camera-recording -name 'frame_*.json' | wc -l)
+runuser -u probelight -- /usr/bin/probelight run --source recording --recording /tmp/camera-recording \
+  --display headless --frames 0 --save-every 10 --out /tmp/camera-replay >"$out/camera-replay.txt" 2>&1
+replay_status=$?
+mkdir -p "$out/camera-replay"
+cp /tmp/camera-replay/report.json /tmp/camera-replay/*.png "$out/camera-replay/" 2>/dev/null
+cp /tmp/camera-recording/recording.json /tmp/camera-recording/frame_000005.json "$out/camera-replay/" 2>/dev/null
+# (The guest has no python: the reports' few fields are read with bash.)
+replay_json=$(tr -d '\n' </tmp/camera-replay/report.json 2>/dev/null)
+replayed=""
+if [[ $replay_json =~ \"stream\":\ *\"([^\"]*)\" ]]; then
+  replayed="$(sed -n 's/^  "frames": \([0-9]*\),*$/\1/p' /tmp/camera-replay/report.json) ${BASH_REMATCH[1]}"
+fi
+pass_if camera-recording "$recorded frames recorded; replay: exit $replay_status, ${replayed:-no report}" \
+  bash -c '[[ $1 == 10 && $2 == 0 && $3 == "10 "*", replayed" ]]' _ "$recorded" "$replay_status" "$replayed"
+first_png=$(cd /tmp/camera-run && ls frame_*.png 2>/dev/null | head -n 1)
+host_request verify camera-replay-pictures png-matches "camera-replay/${first_png:-none}" \
+  "camera-run/${first_png:-none}" 0.5 2
+runuser -u probelight -- /usr/bin/probelight analyze --frame /tmp/camera-recording/frame_000005.json \
+  --out /tmp/camera-analyze >"$out/camera-analyze.txt" 2>&1
+analyze_status=$?
+cp /tmp/camera-analyze/analysis.json "$out/camera-analyze.json" 2>/dev/null
+analysis_json=$(tr -d '\n' </tmp/camera-analyze/analysis.json 2>/dev/null)
+analyzed=""
+if [[ $analysis_json =~ \"frame\":\ *\{[^}]*\"width_px\":\ *([0-9]+),\ *\"height_px\":\ *([0-9]+) ]]; then
+  analyzed="${BASH_REMATCH[1]} ${BASH_REMATCH[2]}"
+  [[ $analysis_json =~ \"exposure_us\":\ *([0-9.e+-]+) ]] && analyzed+=" exposure ${BASH_REMATCH[1]} us"
+  [[ $analysis_json =~ \"error\":\ *\"([^\"]*)\" ]] && analyzed+=" | ${BASH_REMATCH[1]}"
+fi
+pass_if camera-recording-analyzed "analyze --frame frame_000005.json: exit $analyze_status (3: no tag); ${analyzed:-no analysis.json}" \
+  bash -c '[[ $1 == 3 && $2 == "636 480 "*"tag"* ]]' _ "$analyze_status" "$analyzed"
 # A calibration for a size the camera cannot stream (the shipped template's
 # 640x480; vimc gives 636x480 nearest) is refused naming both, with exit
 # status 2: a configuration error that the unit does not restart.
