@@ -1,6 +1,8 @@
 // --bracket FILE@EV, the label of one bracket frame: the file and a finite
-// EV within 0.125..24 stops, or one UsageError line.
+// EV within 0.125..24 stops; or a recorded frame's file alone (its EV from
+// its metadata, later); or one UsageError line.
 #include "app/command_line.hpp"
+#include "capture/frame_recording.hpp"
 #include "fuzz/fuzz_input.hpp"
 
 using namespace probelight;
@@ -14,6 +16,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         {"--frame", "frame.png", "--camera", "camera.yaml", "--rig", "rig.yaml", "--out", "out", "--bracket", label});
     fuzz::require(options.brackets.size() == 1, "one --bracket did not give one bracket frame");
     const BracketOption& bracket = options.brackets[0];
+    if (bracket.ev_from_metadata) {
+      fuzz::require(bracket.path == label && label.find('@') == std::string::npos && isRecordedFramePath(label),
+                    "a label without @EV taken for a recorded frame that is not one");
+      return 0;
+    }
     fuzz::require(fuzz::finite(bracket.ev) && std::abs(bracket.ev) >= kMinBracketEv && std::abs(bracket.ev) <= kMaxBracketEv,
                   "a bracket EV out of 0.125..24 stops accepted");
     fuzz::require(!bracket.path.empty() && label.compare(0, bracket.path.size(), bracket.path) == 0 &&
