@@ -443,6 +443,18 @@ class Kiosk {
 
   // --- what the run leaves -----------------------------------------------------
 
+  // DIR/camera.yaml and DIR/rig.yaml: what the frames in DIR were seen
+  // through (--capture, --record).
+  Status saveCalibration(const fs::path& dir, const char* flag) const {
+    try {
+      config::saveCameraFile((dir / "camera.yaml").string(), inputs_.camera);
+      config::saveRigFile((dir / "rig.yaml").string(), inputs_.rig);
+    } catch (const config::ConfigError& error) {
+      return Status::runtimeFailure(std::string(error.what()) + " (" + flag + ")");
+    }
+    return Status::ok();
+  }
+
   // --record DIR: made now, and refused when it already holds a recording
   // (written over, frame by frame, it would be lost).
   Status checkRecordingFolder() {
@@ -459,13 +471,7 @@ class Kiosk {
   // its frames are seen through, so that the recording replays alone.
   Status beginRecording() {
     if (options_.record_dir.empty()) return Status::ok();
-    const fs::path dir = options_.record_dir;
-    try {
-      config::saveCameraFile((dir / "camera.yaml").string(), inputs_.camera);
-      config::saveRigFile((dir / "rig.yaml").string(), inputs_.rig);
-    } catch (const config::ConfigError& error) {
-      return Status::runtimeFailure(std::string(error.what()) + " (--record)");
-    }
+    PROBELIGHT_TRY(saveCalibration(options_.record_dir, "--record"));
     RecordingHeader header;
     header.source = source_->name();
     header.stream = source_->streamDescription();
@@ -509,12 +515,7 @@ class Kiosk {
     const fs::path dir = options_.capture_dir;
     if (!writeRgbImage((dir / "frame.png").string(), last_pipeline_frame_))
       return Status::runtimeFailure("cannot write " + (dir / "frame.png").string() + " (--capture)");
-    try {
-      config::saveCameraFile((dir / "camera.yaml").string(), inputs_.camera);
-      config::saveRigFile((dir / "rig.yaml").string(), inputs_.rig);
-    } catch (const config::ConfigError& error) {
-      return Status::runtimeFailure(std::string(error.what()) + " (--capture)");
-    }
+    PROBELIGHT_TRY(saveCalibration(dir, "--capture"));
     if (!options_.quiet) log_ << "probelight: frame " << last_frame_number_ << " kept in " << dir.string() << "/\n";
     return Status::ok();
   }

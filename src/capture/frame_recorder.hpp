@@ -30,8 +30,7 @@ class FrameRecorder {
   bool finish(std::string& error);
 
   const std::string& dir() const { return dir_; }
-  // Frames queued so far (written, after finish()), and their bytes.
-  std::uint64_t framesRecorded() const { return frames_queued_; }
+  // The bytes of the frames queued so far.
   std::uint64_t bytesRecorded() const { return bytes_queued_; }
   // Frames whose files are written (all of them, after a successful finish()).
   int framesWritten() const { return queue_.written(); }
