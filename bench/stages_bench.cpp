@@ -38,9 +38,12 @@
 #include "ibl/irradiance.hpp"
 #include "ibl/spherical_harmonics.hpp"
 #include "ibl/mirror_ball.hpp"
+#include "ibl/probe_accumulator.hpp"
+#include "ibl/probe_observation.hpp"
 #include "ibl/probe_outline.hpp"
 #include "ibl/probe_to_cube.hpp"
 #include "ibl/ground_shadow.hpp"
+#include "ibl/hdr_bracket.hpp"
 #include "ibl/light_dome.hpp"
 #include "ibl/spherical_blur.hpp"
 #include "ibl/surface_shading.hpp"
@@ -824,6 +827,87 @@ void cpuProbeToCube(benchmark::State& state, int face_size) {
   setCounters(state, row);
 }
 
+// The multi-view probe's merge, per frame: the view's samples and their
+// confidence (observeBall, with the validity the GPU pass reads back), the
+// frame around the ball where the ball is blind (addFrameAroundBall), and
+// the update of the accumulated probe (ProbeAccumulator::add), cycling
+// through the frames. The reflection maps are made beforehand (their cost
+// is probe_to_cube's row). Error: the 5 normals' irradiance of the merged
+// probe against the clipped truth, beside frame 0's own map's.
+void probeMerge(benchmark::State& state, bool use_frame) {
+  Setup& s = setup();
+  constexpr int kFace = 64;
+  struct MergeInput {
+    ibl::CubeMapRGB map{kFace};
+    std::vector<float> validity;
+  };
+  static std::vector<MergeInput> inputs = [&] {
+    std::vector<MergeInput> made;
+    ibl::ProbeToCubeParams params;
+    params.face_size = kFace;
+    params.probe_reflectance = s.scene.rig.probe_reflectance;
+    for (const Frame& frame : s.frames) {
+      MergeInput input;
+      input.map = ibl::probeImageToCubeMap(frame.view, frame.rgb, params);
+      input.validity.assign(static_cast<std::size_t>(ibl::kCubeFaceCount) * kFace * kFace, 0.0f);
+      for (int face = 0; face < ibl::kCubeFaceCount; ++face)
+        for (int y = 0; y < kFace; ++y)
+          for (int x = 0; x < kFace; ++x)
+            if (ibl::reflectedDirectionToPixel(frame.view, ibl::cubeTexelCenterDirection(face, x, y, kFace), 1))
+              input.validity[(static_cast<std::size_t>(face) * kFace + y) * kFace + x] = 1.0f;
+      made.push_back(std::move(input));
+    }
+    return made;
+  }();
+  const ibl::HdrMergeSettings merge;
+  const double clip_level = ibl::clippedMapLevel(merge, s.scene.rig.probe_reflectance);
+  ibl::ProbeAccumulatorSettings settings;
+  settings.noise.probe_reflectance = s.scene.rig.probe_reflectance;
+  settings.noise.clip_level = clip_level;
+  ibl::ObservationSettings observation_settings;
+  observation_settings.use_frame = use_frame;
+  RigGeometry rig = s.scene.rig;
+  rig.post_radius_m = s.scene.post_radius_m;
+  ibl::ProbeObservation observed(kFace);  // kept from frame to frame, as the kiosk would
+  auto mergeFrame = [&](ibl::ProbeAccumulator& probe, std::size_t f) {
+    const Frame& frame = s.frames[f];
+    const ibl::LinearPixelReader read = [&](int x, int y, bool& clipped) {
+      const std::uint8_t* p = frame.rgb.row(y) + 3 * x;
+      clipped = std::max({p[0], p[1], p[2]}) >= merge.clip_code;
+      // Camera linear: the map's units (the map divides the ball's reflectance out).
+      return glm::dvec3(ibl::srgbToLinear(p[0] / 255.0), ibl::srgbToLinear(p[1] / 255.0), ibl::srgbToLinear(p[2] / 255.0));
+    };
+    ibl::observeBall(frame.view, inputs[f].map, &inputs[f].validity, nullptr, clip_level, observation_settings, observed);
+    ibl::addFrameAroundBall(observed, frame.view, rig, read, observation_settings);
+    return probe.add(observed);
+  };
+  const std::string name = std::string("probe_merge/") + (use_frame ? "ball+frame" : "ball") + "/face:64";
+  const ErrorRow& row = errorsFor(name, [&] {
+    ErrorRow r;
+    ibl::ProbeAccumulator probe(settings);
+    for (std::size_t f = 0; f < s.frames.size(); ++f) mergeFrame(probe, f);
+    const ibl::CubeMapRGB merged = probe.radianceMap(static_cast<float>(clip_level));
+    double merged_error = 0.0, single_error = 0.0;
+    for (int i = 0; i < 5; ++i) {
+      const double truth = s.irradiance_truth[i];
+      merged_error += std::abs(luminance(ibl::irradianceFromCubeMap(merged, kNormals[i])) - truth) / truth / 5.0;
+      single_error += std::abs(luminance(ibl::irradianceFromCubeMap(inputs[0].map, kNormals[i])) - truth) / truth / 5.0;
+    }
+    r.values = {{"merged_err_pct", 100.0 * merged_error},
+                {"frame0_err_pct", 100.0 * single_error},
+                {"seen_pct", 100.0 * probe.seenSolidAngleFraction()}};
+    return r;
+  });
+  ibl::ProbeAccumulator probe(settings);
+  std::size_t next = 0;
+  for (auto _ : state) {
+    const ibl::AccumulateCounts counts = mergeFrame(probe, next);
+    benchmark::DoNotOptimize(counts.seen);
+    next = (next + 1) % s.frames.size();
+  }
+  setCounters(state, row);
+}
+
 void cpuBlurPass(benchmark::State& state, int input_face_size, int output_face_size, int half_taps) {
   ibl::SphericalBlurPass pass;
   pass.axis = ibl::BlurAxis::kEast;
@@ -1214,6 +1298,12 @@ void registerAll() {
   benchmark::RegisterBenchmark("cpu/probe_to_cube/face:64", [](benchmark::State& state) { cpuProbeToCube(state, 64); })
       ->Unit(kMillisecond)
       ->MinTime(kMinTime);
+  for (bool use_frame : {false, true})
+    benchmark::RegisterBenchmark((std::string("probe_merge/") + (use_frame ? "ball+frame" : "ball") + "/face:64").c_str(),
+                                 [=](benchmark::State& state) { probeMerge(state, use_frame); })
+        ->Unit(kMillisecond)
+        ->UseRealTime()
+        ->MinTime(kMinTime);
   benchmark::RegisterBenchmark("cpu/blur_pass/64to32/half_taps:8",
                                [](benchmark::State& state) { cpuBlurPass(state, 64, 32, 8); })
       ->Unit(kMillisecond)

@@ -65,6 +65,33 @@ class SlowWobblePath : public CameraPath {
   CameraPathConfig config_;
 };
 
+// A hand-held sweep: the kiosk carried in an arc around the rig and back
+// (sweep_azimuth_deg either side of the start, rising and falling by
+// sweep_elevation_deg, one way in sweep_seconds at 30 fps, eased at the
+// turns like an arm), with the slow wobble of a hand on top.
+class HandHeldSweepPath : public CameraPath {
+ public:
+  HandHeldSweepPath(glm::dvec3 target, const CameraPathConfig& config) : target_(target), config_(config), wobble_(target, config) {}
+  PoseCamFromWorld pose(std::uint64_t frame) const override {
+    const double one_way_frames = std::max(1.0, 30.0 * config_.sweep_seconds);
+    // 0 -> 1 -> 0 over two sweeps, with the arm's ease (a cosine) at each end.
+    const double phase = std::fmod(static_cast<double>(frame) / one_way_frames, 2.0);
+    const double along = 0.5 - 0.5 * std::cos(kPi * phase);
+    const double azimuth = config_.azimuth_start_deg + config_.sweep_azimuth_deg * (2.0 * along - 1.0);
+    const double elevation = config_.elevation_deg + config_.sweep_elevation_deg * std::sin(kPi * along);
+    // The hand's drift: the wobble path's offsets from its own start.
+    const PoseCamFromWorld drift = wobble_.pose(frame);
+    const glm::dvec3 drift_eye = drift.cameraCenterWorld() -
+                                 orbitEye(target_, config_.distance_m, config_.elevation_deg, config_.azimuth_start_deg);
+    return lookAtPose(orbitEye(target_, config_.distance_m, elevation, azimuth) + drift_eye, target_);
+  }
+
+ private:
+  glm::dvec3 target_;
+  CameraPathConfig config_;
+  SlowWobblePath wobble_;
+};
+
 class RandomPath : public CameraPath {
  public:
   RandomPath(const SceneConfig& scene)
@@ -144,6 +171,7 @@ std::unique_ptr<CameraPath> makeCameraPath(const SceneConfig& scene) {
         lookAtPose(orbitEye(target, config.distance_m, config.elevation_deg, config.azimuth_start_deg), target));
   if (config.name == "orbit") return std::make_unique<OrbitPath>(target, config);
   if (config.name == "slow_wobble") return std::make_unique<SlowWobblePath>(target, config);
+  if (config.name == "hand_held_sweep") return std::make_unique<HandHeldSweepPath>(target, config);
   if (config.name == "random") return std::make_unique<RandomPath>(scene);
   std::string known;
   for (const std::string& name : cameraPathNames()) known += (known.empty() ? "" : ", ") + name;

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <numbers>
+#include <utility>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -37,7 +38,8 @@ class UniformEnvironment : public Environment {
 
 class SunSkyEnvironment : public Environment {
  public:
-  SunSkyEnvironment() : sun_dir_(directionFromAzimuthElevation(degToRad(-120.0), degToRad(40.0))) {
+  explicit SunSkyEnvironment(double sun_elevation_deg = 40.0, std::string name = "sun_sky")
+      : sun_dir_(directionFromAzimuthElevation(degToRad(-120.0), degToRad(sun_elevation_deg))), name_(std::move(name)) {
     // Sun irradiance at normal incidence = 3 pi (about 3x the sky's E_up).
     double disc_solid_angle = 2.0 * kPi * (1.0 - std::cos(kSunRadiusRad));
     sun_radiance_ = 3.0 * kPi / disc_solid_angle;
@@ -58,12 +60,13 @@ class SunSkyEnvironment : public Environment {
     }
     return sky;
   }
-  std::string name() const override { return "sun_sky"; }
+  std::string name() const override { return name_; }
 
  private:
   static constexpr double kSunRadiusRad = 1.5 * kPi / 180.0;
   static constexpr double kSunLimbRad = 0.15 * kPi / 180.0;
   glm::dvec3 sun_dir_;
+  std::string name_;
   double sun_radiance_ = 0.0;
   // A hair wider than the disc and its limb, so rounding never drops an edge direction.
   double cos_outer_edge_ = std::cos((kSunRadiusRad + kSunLimbRad) * 1.001);
@@ -115,6 +118,37 @@ glm::dvec3 boxRadiance(const AngularBox (&boxes)[N], const glm::dvec3& dir, doub
   }
   return result;
 }
+
+// A street at night: a dark sky over darker facades, lit by two small
+// lamps low over the street: the lights a ball easily has behind it.
+class NightStreetEnvironment : public Environment {
+ public:
+  NightStreetEnvironment() {
+    const double disc = 2.0 * kPi * (1.0 - std::cos(kLampRadiusRad));
+    // Each lamp's irradiance at normal incidence: 30x the sky's E_up (pi * 0.01).
+    lamp_radiance_ = 30.0 * kPi * 0.01 / disc;
+    lamps_[0] = directionFromAzimuthElevation(degToRad(60.0), degToRad(8.0));
+    lamps_[1] = directionFromAzimuthElevation(degToRad(180.0), degToRad(15.0));
+  }
+  glm::dvec3 radiance(const glm::dvec3& dir) const override {
+    // Facades up to 25 deg, the sky above.
+    glm::dvec3 value = dir.z < std::sin(degToRad(25.0)) ? glm::dvec3(0.03, 0.028, 0.025) : glm::dvec3(0.008, 0.01, 0.014);
+    for (const glm::dvec3& lamp : lamps_) {
+      const double cos_angle = std::clamp(glm::dot(dir, lamp), -1.0, 1.0);
+      if (cos_angle < std::cos(kLampRadiusRad + kLampLimbRad)) continue;
+      value += smoothEdge(kLampRadiusRad - std::acos(cos_angle), 2.0 * kLampLimbRad) * lamp_radiance_ *
+               glm::dvec3(1.0, 0.8, 0.55);  // sodium-ish
+    }
+    return value;
+  }
+  std::string name() const override { return "night_street"; }
+
+ private:
+  static constexpr double kLampRadiusRad = 2.0 * kPi / 180.0;
+  static constexpr double kLampLimbRad = 0.2 * kPi / 180.0;
+  glm::dvec3 lamps_[2];
+  double lamp_radiance_ = 0.0;
+};
 
 class StudioEnvironment : public Environment {
  public:
@@ -226,6 +260,8 @@ glm::dvec3 LatLongEnvironment::radiance(const glm::dvec3& dir) const {
 std::unique_ptr<Environment> makeEnvironment(const std::string& name_or_path) {
   if (name_or_path == "uniform") return std::make_unique<UniformEnvironment>();
   if (name_or_path == "sun_sky") return std::make_unique<SunSkyEnvironment>();
+  if (name_or_path == "sunrise") return std::make_unique<SunSkyEnvironment>(4.0, "sunrise");
+  if (name_or_path == "night_street") return std::make_unique<NightStreetEnvironment>();
   if (name_or_path == "studio") return std::make_unique<StudioEnvironment>();
   if (name_or_path == "overcast") return std::make_unique<OvercastEnvironment>();
   if (name_or_path == "coloured_wall") return std::make_unique<ColouredWallEnvironment>();

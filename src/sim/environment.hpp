@@ -51,6 +51,11 @@ class LatLongEnvironment : public Environment {
 //   uniform        L = 1 everywhere (for exact checks: E = pi L)
 //   sun_sky        blue sky gradient + a 3 deg sun disc at azimuth -120 deg,
 //                  elevation 40 deg whose irradiance is ~3x the sky's
+//   sunrise        the same sky and sun, the sun 4 deg above the horizon
+//   night_street   a dark sky (0.01) and facades (0.03) with two street
+//                  lamps low over the street (2 deg discs at 8 and 15 deg
+//                  elevation, 120 deg apart), each lighting a normal facing
+//                  it like the night sky's whole hemisphere 30 times over
 //   studio         dark room (0.02) with three soft boxes (key, fill, top)
 //   overcast       CIE overcast sky, L = (1 + 2 cos theta) / 3, zenith 1
 //   coloured_wall  neutral sky with a saturated red wall toward +X

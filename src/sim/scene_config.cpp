@@ -27,12 +27,12 @@ SceneConfig defaultScene() {
 }
 
 const std::vector<std::string>& environmentNames() {
-  static const std::vector<std::string> names = {"sun_sky", "studio", "overcast", "coloured_wall", "uniform"};
+  static const std::vector<std::string> names = {"sun_sky", "sunrise", "night_street", "studio", "overcast", "coloured_wall", "uniform"};
   return names;
 }
 
 const std::vector<std::string>& cameraPathNames() {
-  static const std::vector<std::string> names = {"static", "orbit", "slow_wobble", "random"};
+  static const std::vector<std::string> names = {"static", "orbit", "slow_wobble", "random", "hand_held_sweep"};
   return names;
 }
 

@@ -56,6 +56,10 @@ struct CameraPathConfig {
   // slow_wobble: hand-held-like drift around the static pose.
   double wobble_angle_deg = 2.0;
   double wobble_distance_m = 0.02;
+  // hand_held_sweep: an arc around the rig and back, with the wobble on top.
+  double sweep_azimuth_deg = 35.0;    // either side of azimuth_start_deg
+  double sweep_elevation_deg = 15.0;  // risen at the arc's middle
+  double sweep_seconds = 3.0;         // one way
   // random: one independent pose per frame, see RandomPoseRange.
   double random_min_distance_m = 0.45;
   double random_max_distance_m = 0.75;

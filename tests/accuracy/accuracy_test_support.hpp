@@ -2,13 +2,17 @@
 // and the static views of the simulated rig they measure from.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "core/types.hpp"
 #include "gles/egl_context.hpp"
+#include "ibl/probe_outline.hpp"
+#include "sim/world.hpp"
 #include "sim/scene_config.hpp"
 #include "tracking/tag_tracker.hpp"
 
@@ -48,5 +52,32 @@ class GpuSuite : public ::testing::Test {
   }
   static inline gles::EglContext* context_ = nullptr;
 };
+
+// An exposure bracket of `frame`: the reference exposure, then shorter ones
+// 3 stops apart until the ball's square shows no pixel at or above
+// `clip_code` (or 15 stops down). images[i] was taken at evs[i].
+inline void renderBracketUntilBallUnclipped(const sim::World& world, std::uint64_t frame, const ImageRGB8& reference,
+                                            const ibl::ProbeOutline& outline, int clip_code,
+                                            std::vector<ImageRGB8>& images, std::vector<double>& evs) {
+  images.assign(1, reference);
+  evs.assign(1, 0.0);
+  auto ballClips = [&](const ImageRGB8& image) {
+    const int r = static_cast<int>(outline.radius_px);
+    for (int y = std::max(0, static_cast<int>(outline.center_px.y) - r);
+         y <= std::min(image.height - 1, static_cast<int>(outline.center_px.y) + r); ++y)
+      for (int x = std::max(0, static_cast<int>(outline.center_px.x) - r);
+           x <= std::min(image.width - 1, static_cast<int>(outline.center_px.x) + r); ++x)
+        for (int c = 0; c < 3; ++c)
+          if (image.row(y)[3 * x + c] >= clip_code) return true;
+    return false;
+  };
+  while (ballClips(images.back()) && evs.back() > -15.0) {
+    evs.push_back(evs.back() - 3.0);
+    ImageRGB8 shorter;
+    FrameTruth ignored;
+    world.render(frame, shorter, ignored, evs.back());
+    images.push_back(std::move(shorter));
+  }
+}
 
 }  // namespace probelight::testing

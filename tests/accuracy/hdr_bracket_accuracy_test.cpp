@@ -152,27 +152,9 @@ TEST(HdrBracketAccuracy, IrradianceAndDominantLightAgainstTheHdrTruth) {
       const ibl::MirrorBallView ball{scene.camera, track.pose, scene.rig.probe_center_w, scene.rig.probe_radius_m};
       const ibl::ProbeOutline outline = ibl::computeProbeOutline(ball);
 
-      // Shorter exposures, 3 stops apart, until the ball shows no clipped
-      // pixel (or 15 stops down).
-      std::vector<ImageRGB8> images{reference};
-      std::vector<double> evs{0.0};
-      auto ballClips = [&](const ImageRGB8& image) {
-        const int r = static_cast<int>(outline.radius_px);
-        for (int y = std::max(0, static_cast<int>(outline.center_px.y) - r);
-             y <= std::min(image.height - 1, static_cast<int>(outline.center_px.y) + r); ++y)
-          for (int x = std::max(0, static_cast<int>(outline.center_px.x) - r);
-               x <= std::min(image.width - 1, static_cast<int>(outline.center_px.x) + r); ++x)
-            for (int c = 0; c < 3; ++c)
-              if (image.row(y)[3 * x + c] >= merge.clip_code) return true;
-        return false;
-      };
-      while (ballClips(images.back()) && evs.back() > -15.0) {
-        evs.push_back(evs.back() - 3.0);
-        ImageRGB8 shorter;
-        FrameTruth ignored;
-        world.render(0, shorter, ignored, evs.back());
-        images.push_back(std::move(shorter));
-      }
+      std::vector<ImageRGB8> images;
+      std::vector<double> evs;
+      testing::renderBracketUntilBallUnclipped(world, 0, reference, outline, merge.clip_code, images, evs);
       // Merged as `analyze` and `run` merge (direction by direction, each
       // frame through its pose: the same pose here, the camera is still).
       std::vector<ibl::BracketView> frames;
