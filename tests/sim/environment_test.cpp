@@ -11,6 +11,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "sim/camera_path.hpp"
 #include "sim/environment.hpp"
 #include "sim/world.hpp"
 #include "sim_test_helpers.hpp"
@@ -186,6 +187,41 @@ TEST(RealHdrWorlds, AreUprightAndBrighterAbove) {
     EXPECT_GT(brightest_direction.z, 0.1) << name;
     EXPECT_GT(brightest, 100.0) << name << ": HDR values survive loading (peaks are in the thousands)";
   }
+}
+
+}  // namespace
+}  // namespace probelight::sim
+
+namespace probelight::sim {
+namespace {
+
+// The sweep goes sweep_azimuth_deg either side of the start and back in
+// 2 x sweep_seconds at 30 fps: at its turns the eye's azimuth about the
+// point it looks at is the start -+ the sweep (the wobble's drift, 2 cm at
+// 0.55 m seen from above at 25 deg, moves it by at most
+// atan(0.02 / (0.55 cos 25 deg)) = 2.3 deg), and it comes back to where it began.
+TEST(CameraPaths, TheHandHeldSweepTurnsAtItsEndsAndComesBack) {
+  SceneConfig scene = defaultScene();
+  scene.camera_path.name = "hand_held_sweep";
+  scene.camera_path.distance_m = 0.55;
+  scene.camera_path.elevation_deg = 25.0;
+  const glm::dvec3 target(0.1, 0.05, 0.0);
+  scene.camera_path.look_at_w = target;
+  const std::unique_ptr<CameraPath> path = makeCameraPath(scene);
+  const CameraPathConfig& config = scene.camera_path;
+  const auto one_way = static_cast<std::uint64_t>(30.0 * config.sweep_seconds);
+  auto eyeAzimuthDeg = [&](std::uint64_t frame) {
+    const glm::dvec3 eye = path->pose(frame).cameraCenterWorld();
+    return std::atan2(eye.y - target.y, eye.x - target.x) * 180.0 / std::numbers::pi;
+  };
+  const double start = config.azimuth_start_deg;
+  EXPECT_NEAR(eyeAzimuthDeg(0), start - config.sweep_azimuth_deg, 2.3);
+  EXPECT_NEAR(eyeAzimuthDeg(one_way), start + config.sweep_azimuth_deg, 2.3);
+  EXPECT_NEAR(eyeAzimuthDeg(2 * one_way), eyeAzimuthDeg(0), 2.3);
+  // Never a jump: at most the arc's fastest, pi/2 x 70 deg / 90 frames =
+  // 1.2 deg a frame, plus the drift's.
+  for (std::uint64_t frame = 1; frame <= 2 * one_way; ++frame)
+    EXPECT_LT(std::abs(eyeAzimuthDeg(frame) - eyeAzimuthDeg(frame - 1)), 1.5) << frame;
 }
 
 }  // namespace
