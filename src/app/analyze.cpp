@@ -26,6 +26,8 @@
 #include "ibl/hdr_bracket.hpp"
 #include "ibl/irradiance.hpp"
 #include "ibl/lighting_fit.hpp"
+#include "ibl/probe_accumulator.hpp"
+#include "ibl/probe_observation.hpp"
 #include "model/gltf_loader.hpp"
 #include "stages/bracket_merge.hpp"
 #include "stages/compose_stage.hpp"
@@ -79,6 +81,7 @@ class Analyzer {
     if (outcome_.isOk()) measureProbe();
     if (outcome_.isOk()) fail(makeMaps());
     if (reflection_ && !options_.brackets.empty()) mergeBracket();
+    if (reflection_ && !options_.more_views.empty() && outcome_.isOk()) fail(mergeViews());
     if (reflection_) fitLights();
     if (render_ && reflection_ && outcome_.isOk()) fail(renderComposite());
     writePictures();
@@ -299,21 +302,7 @@ class Analyzer {
     const BracketSetup setup{ctx_->view, ctx_->outline, rig_, tagDetectorSettings(settings_, rig_),
                              ibl::HdrMergeSettings{settings_.maps.stages.camera_transfer}, reflection_->face_size};
     Json unread = Json::array();
-    std::vector<BracketCandidate> candidates;
-    for (BracketOption bracket : options_.brackets) {
-      FrameBuffer frame;
-      cv::Mat bgr;
-      std::string why = readFrame(bracket.path, frame, bgr);
-      if (why.empty() && (bgr.cols != frame_bgr_.cols || bgr.rows != frame_bgr_.rows))
-        why = "it is " + sizeText(bgr.cols, bgr.rows) + ", --frame is " + sizeText(frame_bgr_.cols, frame_bgr_.rows);
-      if (why.empty() && bracket.ev_from_metadata) why = evFromMetadata(frame.metadata, bracket.ev);
-      if (!why.empty()) {
-        unread.push_back({{"frame", bracket.path}, {"ev", bracket.ev}, {"used", false}, {"reason", why}});
-        warnBracket(bracket.path, bracket.ev, why);
-        continue;
-      }
-      candidates.push_back({bracket.path, bracket.ev, std::move(frame.rgb)});
-    }
+    std::vector<BracketCandidate> candidates = readBracket(options_.brackets, frame_, unread);
     BracketMergeResult merged =
         mergeBracketProbe(frame_.rgb, std::move(candidates), setup,
                           [&](const BracketCandidate& candidate, const std::string& why) {
@@ -329,10 +318,196 @@ class Analyzer {
       return;  // the white border may still help
     }
     bracket_map_ = std::move(merged.hdr_cube);
+    bracket_still_clipped_ = std::move(merged.still_clipped);
     hdr["method"] = "bracket";
     hdr["status"] = merged.status;
     hdr["still_clipped_sr"] = merged.still_clipped_sr;
     hdr["ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  // --frame given again: every view's ball (its bracket merged when it has
+  // one) and the frame around it, merged into one world-aligned probe with
+  // the first view's (ibl/probe_accumulator.hpp), in the first view's
+  // exposure. The merged probe becomes the maps and, where any view had a
+  // bracket, the HDR map the lights are fitted from. A view that cannot be
+  // used (unreadable, another size, no tag, ball out of the frame or too
+  // small) is left out with its reason, as a bracket frame is.
+  Status mergeViews() {
+    const auto start = std::chrono::steady_clock::now();
+    const ibl::HdrMergeSettings merge{settings_.maps.stages.camera_transfer};
+    const double clip_level = ibl::clippedMapLevel(merge, rig_.probe_reflectance);
+    ibl::ProbeAccumulatorSettings probe_settings;
+    probe_settings.face_size = reflection_->face_size;
+    probe_settings.noise.camera_transfer = settings_.maps.stages.camera_transfer;
+    probe_settings.noise.probe_reflectance = rig_.probe_reflectance;
+    probe_settings.noise.clip_level = clip_level;
+    ibl::ProbeAccumulator probe(probe_settings);
+    const ibl::ObservationSettings observation_settings;
+    bool any_bracket = bracket_map_.has_value();
+    Json views = Json::array();
+
+    // One view into the probe: its map in its own exposure, scaled to the first's.
+    auto addView = [&](const FrameBuffer& frame, const ibl::MirrorBallView& view, const ibl::CubeMapRGB& map,
+                       const std::vector<float>& validity, const std::vector<std::uint8_t>* still_clipped,
+                       double to_first_exposure, Json& entry) {
+      ibl::ProbeObservation observed =
+          ibl::observeBall(view, map, &validity, still_clipped, clip_level, observation_settings);
+      const ibl::LinearPixelReader read = [&](int x, int y, bool& clipped) {
+        const glm::u8vec3 code = frame.rgbAt(x, y);
+        clipped = std::max({code.r, code.g, code.b}) >= merge.clip_code;
+        const ibl::CameraTransfer& transfer = settings_.maps.stages.camera_transfer;
+        return glm::dvec3(ibl::decodeCameraValue(transfer, code.r / 255.0), ibl::decodeCameraValue(transfer, code.g / 255.0),
+                          ibl::decodeCameraValue(transfer, code.b / 255.0));
+      };
+      const long frame_texels = ibl::addFrameAroundBall(observed, view, rig_, read, observation_settings);
+      if (to_first_exposure != 1.0)
+        for (auto& face : observed.radiance.faces)
+          for (glm::vec3& texel : face) texel *= static_cast<float>(to_first_exposure);
+      const ibl::AccumulateCounts counts = probe.add(observed);
+      entry["texels_seen"] = counts.seen;
+      entry["texels_first_seen"] = counts.first;
+      entry["texels_merged"] = counts.merged;
+      entry["texels_changed"] = counts.changed;
+      entry["texels_from_frame_around_ball"] = frame_texels;
+      entry["probe_seen_sphere_fraction"] = probe.seenSolidAngleFraction();
+    };
+
+    Json first = {{"frame", options_.frame_path}, {"used", true}, {"bracket", bracket_map_.has_value()}};
+    addView(frame_, ctx_->view, bracket_map_ ? *bracket_map_ : *reflection_, reflection_validity_,
+            bracket_map_ ? &bracket_still_clipped_ : nullptr, 1.0, first);
+    views.push_back(first);
+
+    for (std::size_t v = 0; v < options_.more_views.size(); ++v) {
+      const AnalyzeView& more = options_.more_views[v];
+      Json entry = {{"frame", more.frame_path}};
+      auto leaveOut = [&](const std::string& why) {
+        entry["used"] = false;
+        entry["reason"] = why;
+        log_ << logPrefix(LogPriority::kWarning) << "probelight: " << command() << ": warning: --frame "
+             << more.frame_path << " left out: " << why << "\n";
+        views.push_back(entry);
+      };
+      FrameBuffer frame;
+      cv::Mat bgr;
+      if (std::string why = readFrame(more.frame_path, frame, bgr); !why.empty()) {
+        leaveOut(why);
+        continue;
+      }
+      if (bgr.cols != frame_bgr_.cols || bgr.rows != frame_bgr_.rows) {
+        leaveOut("it is " + sizeText(bgr.cols, bgr.rows) + ", the first --frame is " +
+                 sizeText(frame_bgr_.cols, frame_bgr_.rows));
+        continue;
+      }
+      // Its exposure against the first's, where both frames say (recorded
+      // frames); image files are taken to share the first's.
+      double to_first_exposure = 1.0;
+      auto product = [](const FrameMetadata& m) {
+        return m.exposure_us * (m.analogue_gain > 0.0 ? m.analogue_gain : 1.0);
+      };
+      if (frame.metadata.exposure_us > 0.0 && frame_.metadata.exposure_us > 0.0) {
+        to_first_exposure = product(frame_.metadata) / product(frame.metadata);
+        entry["exposure_vs_first"] = 1.0 / to_first_exposure;
+      } else {
+        entry["exposure_vs_first"] = "assumed the same (no exposure metadata)";
+      }
+      track_->reset();
+      FrameContext ctx(frame, v + 1);
+      track_->run(ctx);
+      if (!ctx.track.found) {
+        leaveOut("no tag: " + ctx.track.status);
+        continue;
+      }
+      if (!ctx.outline.valid || !ctx.outline.fully_in_image) {
+        leaveOut("the ball is not fully in the image");
+        continue;
+      }
+      if (ctx.outline.radius_px < settings_.map_updates.min_probe_radius_px) {
+        leaveOut("ball too small: radius " + formatFixed(ctx.outline.radius_px, 1) + " px");
+        continue;
+      }
+      // Its reflection map straight from the pass: the update policy, which
+      // holds a moving kiosk's maps still, has no say over still photos.
+      PROBELIGHT_TRY(upload_->run(ctx));
+      std::string error;
+      if (!maps_->maps().updateReflection(upload_->texture(), ctx.view, rig_.probe_reflectance, error))
+        return Status::runtimeFailure("GPU: " + error);
+      std::vector<float> validity;
+      const std::optional<ibl::CubeMapRGB> map = maps_->maps().readReflection(error, &validity);
+      if (!map) return Status::runtimeFailure("GPU: " + error);
+      entry["used"] = true;
+      entry["tag_id"] = ctx.track.id;
+      entry["ball_radius_px"] = ctx.outline.radius_px;
+      // Its own bracket, merged as the first view's is.
+      std::optional<ibl::CubeMapRGB> hdr;
+      std::vector<std::uint8_t> still_clipped;
+      if (!more.brackets.empty()) {
+        const BracketSetup setup{ctx.view, ctx.outline, rig_, tagDetectorSettings(settings_, rig_), merge,
+                                 reflection_->face_size};
+        Json unread = Json::array();
+        std::vector<BracketCandidate> candidates = readBracket(more.brackets, frame, unread);
+        BracketMergeResult merged = mergeBracketProbe(
+            frame.rgb, std::move(candidates), setup,
+            [&](const BracketCandidate& candidate, const std::string& why) { warnBracket(candidate.label, candidate.ev, why); });
+        entry["bracket_status"] = merged.status;
+        if (!unread.empty()) entry["bracket_unread"] = unread;
+        if (merged.hdr_cube) {
+          hdr = std::move(merged.hdr_cube);
+          still_clipped = std::move(merged.still_clipped);
+          any_bracket = true;
+        }
+      }
+      entry["bracket"] = hdr.has_value();
+      addView(frame, ctx.view, hdr ? *hdr : *map, validity, hdr ? &still_clipped : nullptr, to_first_exposure, entry);
+      views.push_back(entry);
+    }
+
+    // The merged probe as the maps: the 8-bit map what the camera shows
+    // (clamped at its clip level), the HDR map all of it.
+    const std::vector<float> validity = probe.validity();
+    reflection_ = probe.radianceMap(static_cast<float>(clip_level));
+    reflection_validity_ = validity;
+    if (any_bracket) {
+      bracket_map_ = probe.radianceMap();
+      bracket_still_clipped_ = probe.lowerBounds();
+    }
+    PROBELIGHT_TRY(maps_->setProbe(*reflection_, validity));
+    std::string error;
+    diffuse_ = maps_->maps().readDiffuse(error, &diffuse_validity_);
+    if (!diffuse_) return Status::runtimeFailure("GPU: " + error);
+    json_["irradiance"] = irradianceJson([&](const glm::dvec3& normal) {
+      return std::numbers::pi * glm::dvec3(diffuse_->sampleBilinear(normal));
+    });
+    long used = 0;
+    for (const Json& view : views) used += view["used"].get<bool>() ? 1 : 0;
+    json_["views"] = {{"given", views.size()},
+                      {"used", used},
+                      {"probe_seen_sphere_fraction", probe.seenSolidAngleFraction()},
+                      {"ms", std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count()},
+                      {"each", views}};
+    return Status::ok();
+  }
+
+  // A view's --bracket frames, read: each one that cannot be read, differs
+  // in size from its --frame (`base`), or has no EV to be placed by is left
+  // out (into `unread`, with its reason, and a warning).
+  std::vector<BracketCandidate> readBracket(const std::vector<BracketOption>& brackets, const FrameBuffer& base,
+                                            Json& unread) const {
+    std::vector<BracketCandidate> candidates;
+    for (BracketOption bracket : brackets) {
+      FrameBuffer frame;
+      cv::Mat bgr;
+      std::string why = readFrame(bracket.path, frame, bgr);
+      if (why.empty() && (bgr.cols != base.rgb.width || bgr.rows != base.rgb.height))
+        why = "it is " + sizeText(bgr.cols, bgr.rows) + ", its --frame is " + sizeText(base.rgb.width, base.rgb.height);
+      if (why.empty() && bracket.ev_from_metadata) why = evFromMetadata(frame.metadata, base.metadata, bracket.ev);
+      if (!why.empty()) {
+        unread.push_back({{"frame", bracket.path}, {"ev", bracket.ev}, {"used", false}, {"reason", why}});
+        warnBracket(bracket.path, bracket.ev, why);
+        continue;
+      }
+      candidates.push_back({bracket.path, bracket.ev, std::move(frame.rgb)});
+    }
+    return candidates;
   }
 
   // An image file, or a recorded frame (run --record) decoded from the
@@ -360,8 +535,7 @@ class Analyzer {
   // A recorded bracket frame's EV from --frame's: their exposures (time x
   // gain) as the metadata says. Why not, when it cannot be told or is out
   // of --bracket's range.
-  std::string evFromMetadata(const FrameMetadata& bracket, double& ev) const {
-    const FrameMetadata& base = frame_.metadata;
+  static std::string evFromMetadata(const FrameMetadata& bracket, const FrameMetadata& base, double& ev) {
     if (!(bracket.exposure_us > 0.0) || !(base.exposure_us > 0.0))
       return "its metadata or --frame's has no exposure: give it as FILE@EV";
     auto product = [](const FrameMetadata& m) { return m.exposure_us * (m.analogue_gain > 0.0 ? m.analogue_gain : 1.0); };
@@ -581,6 +755,7 @@ class Analyzer {
   std::optional<ibl::CubeMapRGB> reflection_, diffuse_;
   std::vector<float> reflection_validity_, diffuse_validity_;
   std::optional<ibl::CubeMapRGB> bracket_map_;  // from --bracket
+  std::vector<std::uint8_t> bracket_still_clipped_;  // its texels clipped in every exposure
   ibl::LightingFit fit_;
 };
 

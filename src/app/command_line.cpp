@@ -342,8 +342,16 @@ namespace {
 std::vector<ValuedFlag> frameFlags(AnalyzeOptions& options, const std::string& out_description) {
   auto into = [](std::string& field) { return [&field](const std::string&, const std::string& value) { field = value; }; };
   return {{"-f,--frame", "FILE",
-           "the camera frame: PNG, JPEG, ..., or a recorded one (DIR/frame_NNNNNN.json from run --record) (required)",
-           into(options.frame_path)},
+           "the camera frame: PNG, JPEG, ..., or a recorded one (DIR/frame_NNNNNN.json from run --record) "
+           "(required); again for more views of the same rig, each with its own pose and the --bracket flags "
+           "after it, merged into one probe",
+           [&options](const std::string&, const std::string& value) {
+             if (options.frame_path.empty())
+               options.frame_path = value;
+             else
+               options.more_views.push_back({value, {}});
+           },
+           true},
           {"--camera", "camera.yaml", "the calibration of the camera that took it (required)", into(options.camera_path)},
           {"--rig", "rig.yaml", "tag and mirror-ball geometry (required)", into(options.rig_path)},
           {"-o,--out", "DIR", out_description + " (required)", into(options.out_dir)},
@@ -376,14 +384,51 @@ static void defaultToTheRecordingsFiles(AnalyzeOptions& options) {
 // Each bracket frame is decoded and kept while merging: 40 of them is a
 // mistake (a glob gone wide), not a bracket; the kiosk's own has 5.
 static void checkBracketCount(const AnalyzeOptions& options) {
-  if (options.brackets.size() > kMaxBracketFrames)
-    throw UsageError("flag --bracket: at most " + std::to_string(kMaxBracketFrames) + " bracket frames, got " +
-                     std::to_string(options.brackets.size()));
+  auto check = [](std::size_t count) {
+    if (count > kMaxBracketFrames)
+      throw UsageError("flag --bracket: at most " + std::to_string(kMaxBracketFrames) + " bracket frames, got " +
+                       std::to_string(count));
+  };
+  check(options.brackets.size());
+  for (const AnalyzeView& view : options.more_views) check(view.brackets.size());
+  if (options.more_views.size() + 1 > kMaxAnalyzeViews)
+    throw UsageError("flag --frame: at most " + std::to_string(kMaxAnalyzeViews) + " views, got " +
+                     std::to_string(options.more_views.size() + 1));
+}
+
+// The flags are parsed flag by flag, so which --frame a --bracket follows
+// is read from the arguments' order: each --bracket belongs to the last
+// --frame before it (one before any --frame, to the first).
+static void giveBracketsToTheirFrames(const std::vector<std::string>& args, AnalyzeOptions& options) {
+  if (options.more_views.empty()) return;
+  std::vector<std::size_t> owner;  // per --bracket in order: 0 the first frame, i view i
+  std::size_t frames_seen = 0;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg == "--") break;
+    const bool frame_flag = arg == "-f" || arg == "--frame";
+    const bool bracket_flag = arg == "--bracket";
+    if (frame_flag || arg.rfind("--frame=", 0) == 0 || (arg.size() > 2 && arg.rfind("-f", 0) == 0 && arg[1] != '-'))
+      ++frames_seen;
+    else if (bracket_flag || arg.rfind("--bracket=", 0) == 0)
+      owner.push_back(frames_seen == 0 ? 0 : frames_seen - 1);
+    if (frame_flag || bracket_flag) ++i;  // its value
+  }
+  if (owner.size() != options.brackets.size()) return;  // cannot tell: all stay with the first
+  std::vector<BracketOption> first;
+  for (std::size_t b = 0; b < owner.size(); ++b) {
+    if (owner[b] == 0)
+      first.push_back(options.brackets[b]);
+    else if (owner[b] - 1 < options.more_views.size())
+      options.more_views[owner[b] - 1].brackets.push_back(options.brackets[b]);
+  }
+  options.brackets = std::move(first);
 }
 
 AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
   AnalyzeOptions options;
   parseFlags(args, kAnalyze, frameFlags(options, "where analysis.json and the pictures go"), lightSwitches(options));
+  giveBracketsToTheirFrames(args, options);
   defaultToTheRecordingsFiles(options);
   // No defaults for these: analysing a frame with some other camera's
   // calibration, or writing over someone's folder, gives plausible nonsense.
@@ -446,6 +491,7 @@ RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
        }}};
   valued.insert(valued.end(), object_flags.begin(), object_flags.end());
   parseFlags(args, kRender, valued, lightSwitches(options.frame));
+  giveBracketsToTheirFrames(args, options.frame);
   defaultToTheRecordingsFiles(options.frame);
   if (options.frame.frame_path.empty()) throw UsageError("render needs --frame FILE (the camera frame)");
   if (options.frame.camera_path.empty()) throw UsageError("render needs --camera camera.yaml (the calibration of the camera that took it)");

@@ -71,6 +71,16 @@ inline constexpr double kMinBracketEv = 0.125;
 inline constexpr double kMaxBracketEv = 24.0;
 inline constexpr std::size_t kMaxBracketFrames = 16;
 
+// A further view of the same rig for analyze (--frame given again), with
+// the --bracket flags that follow it.
+struct AnalyzeView {
+  std::string frame_path;
+  std::vector<BracketOption> brackets;
+};
+// At most this many --frame views: each is tracked and mapped in turn, and
+// 40 of them is a glob gone wide, not a walk round the rig.
+inline constexpr std::size_t kMaxAnalyzeViews = 16;
+
 struct AnalyzeOptions {
   std::string frame_path;   // the camera frame (PNG, JPEG, ...)
   std::string camera_path;  // camera.yaml of the camera that took it
@@ -78,6 +88,11 @@ struct AnalyzeOptions {
   std::string out_dir;      // analysis.json and the pictures go here
   std::string config_path;  // probelight.yaml (optional)
   std::vector<BracketOption> brackets;  // --bracket, repeatable: an exposure bracket
+  // --frame again: further views, each with its own pose and brackets,
+  // merged into one probe with the first (ibl/probe_accumulator.hpp). The
+  // first --frame stays the reference: its exposure is the maps' unit, the
+  // pictures show it.
+  std::vector<AnalyzeView> more_views;
   // --no-white-ref: without a bracket, keep the ball's 8-bit map as it is
   // instead of giving its clipped highlights the light the tag's white
   // border says they hide (to compare the two).

@@ -134,7 +134,7 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
   params.probe_reflectance = setup.rig.probe_reflectance;
   params.camera_transfer = setup.merge.camera_transfer;
   params.samples_per_axis = 4;
-  std::vector<std::uint8_t> still_clipped;
+  std::vector<std::uint8_t>& still_clipped = result.still_clipped;
   result.hdr_cube = ibl::bracketToCubeMap(frames, setup.merge, params, &still_clipped);
   for (int face = 0; face < ibl::kCubeFaceCount; ++face)
     for (int y = 0; y < setup.face_size; ++y)

@@ -79,6 +79,7 @@ struct BracketMergeResult {
   nlohmann::json frames = nlohmann::json::array();  // each candidate: label, ev, used, reason | pose, measured_ev
   std::optional<ibl::CubeMapRGB> hdr_cube;           // empty when no candidate was usable
   double still_clipped_sr = 0.0;  // directions clipped even in the shortest exposure
+  std::vector<std::uint8_t> still_clipped;  // per texel of hdr_cube, 1 where so (a lower bound)
   std::string status;
   int used = 0;
 };

@@ -79,6 +79,21 @@ Status MapsStage::remake(const ibl::MirrorBallView& view, const passes::CameraFr
     GpuStageTimer timer(report_, kReflectionStageName, finish_gpu);
     if (!maps_.updateReflection(frame, view, probe_reflectance_, error)) return Status::runtimeFailure(error);
   }
+  return remakeFromReflection(new_weight);
+}
+
+Status MapsStage::setProbe(const ibl::CubeMapRGB& map, const std::vector<float>& validity) {
+  std::string error;
+  {
+    GpuStageTimer timer(report_, kReflectionStageName, settings_.gpu_finish);
+    if (!maps_.setReflection(map, error, &validity)) return Status::runtimeFailure(error);
+  }
+  return remakeFromReflection(1.0f);
+}
+
+Status MapsStage::remakeFromReflection(float new_weight) {
+  std::string error;
+  const bool finish_gpu = settings_.gpu_finish;
   // Temporal smoothing in both methods: diffuse = w * new + (1 - w) * previous.
   {
     GpuStageTimer timer(report_, diffuseStageName(), finish_gpu);

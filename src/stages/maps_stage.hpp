@@ -44,6 +44,11 @@ class MapsStage {
   // fits the lights from a map made now, not from a smoothed old one).
   void requestFreshMap() { policy_.requestFreshMap(); }
 
+  // A reflection map made elsewhere (a probe merged over views, in the
+  // reflection map's units; validity 1 where seen) becomes the maps, the
+  // diffuse and glossy ones remade from it unblended.
+  Status setProbe(const ibl::CubeMapRGB& map, const std::vector<float>& validity);
+
   // The report names the diffuse stage after the method that runs.
   const char* diffuseStageName() const;
   bool haveMaps() const { return have_maps_; }
@@ -59,6 +64,9 @@ class MapsStage {
 
  private:
   Status remake(const ibl::MirrorBallView& view, const passes::CameraFrameTexture& frame, float new_weight);
+  // The diffuse map (blended by new_weight) and the glossy levels from the
+  // current reflection map.
+  Status remakeFromReflection(float new_weight);
   void record(const MapUpdateDecision& decision);
 
   const PipelineSettings& settings_;

@@ -20,11 +20,20 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdlib.h>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "accuracy_test_support.hpp"
 #include "app/analyze.hpp"
+#include "capture/rgb_image_io.hpp"
+#include "config/camera_file.hpp"
+#include "config/rig_file.hpp"
 #include "ibl/color_transfer.hpp"
 #include "ibl/hdr_bracket.hpp"
 #include "ibl/irradiance.hpp"
@@ -139,13 +148,16 @@ double meanIrradianceError(const Truth& truth, const Estimate& estimate) {
   return sum / 14.0;
 }
 
-CaseFigures runCase(const WorldCase& world_case, const PathCase& path_case) {
+// The world of `world_case` seen along `path`, its brightest light turned
+// to where the ball hides it from the view of `first_frame`; `blind_w` that
+// direction (from the ball, away from that view's eye).
+sim::SceneConfig sceneWithLightBehindTheBall(const WorldCase& world_case, const sim::CameraPathConfig& path,
+                                             std::uint64_t first_frame, glm::dvec3& blind_w) {
   sim::SceneConfig scene = sim::defaultScene();
   scene.environment = world_case.environment;
-  scene.camera_path = path_case.path;
-  // The first view's blind direction, and the light turned into it.
-  const glm::dvec3 first_eye = sim::makeCameraPath(scene)->pose(path_case.frames.front()).cameraCenterWorld();
-  const glm::dvec3 blind_w = glm::normalize(scene.rig.probe_center_w - first_eye);
+  scene.camera_path = path;
+  const glm::dvec3 first_eye = sim::makeCameraPath(scene)->pose(first_frame).cameraCenterWorld();
+  blind_w = glm::normalize(scene.rig.probe_center_w - first_eye);
   if (world_case.script_lamp) {
     scene.lighting.lamp_on_frame = 0;
     scene.lighting.lamp_azimuth_deg = azimuthDeg(blind_w);
@@ -156,6 +168,12 @@ CaseFigures runCase(const WorldCase& world_case, const PathCase& path_case) {
     const sim::World unturned(scene);
     scene.environment_rotation_deg = azimuthDeg(blind_w) - azimuthDeg(brightestSkyDirection(unturned));
   }
+  return scene;
+}
+
+CaseFigures runCase(const WorldCase& world_case, const PathCase& path_case) {
+  glm::dvec3 blind_w;
+  const sim::SceneConfig scene = sceneWithLightBehindTheBall(world_case, path_case.path, path_case.frames.front(), blind_w);
   const sim::World world(scene);
 
   CaseFigures figures;
@@ -293,6 +311,147 @@ TEST(MultiViewAccuracy, TheProbeGatheredOverAPathHasNoBlindSpot) {
   EXPECT_LE(worst_probe, 0.08) << worst_case;
   // Without brackets: no worse than one view.
   EXPECT_LE(ldr_probe_mean, ldr_single_mean);
+}
+
+// Four still photos of the rig from anywhere around it (sim::RandomPoseGenerator's
+// views 0..3), each with its own bracket, given to `probelight analyze` as
+// four --frame flags: analysis.json's irradiance against the same truths and
+// bounds. Without brackets (--no-white-ref: the maps as the ball shows
+// them) the merged views are held to each view analysed alone.
+TEST(MultiViewAccuracy, FourStillViewsGivenToAnalyze) {
+  const std::vector<WorldCase> worlds = {
+      {"sunrise", "sunrise"},
+      {"night_street", "night_street"},
+      {"studio + lamp", "studio", true},
+      {"Kerner (real)", std::string(PROBELIGHT_TEST_DATA_DIR) + "/env/KernerEnvLatLong.exr"},
+      {"Stage (real)", std::string(PROBELIGHT_TEST_DATA_DIR) + "/env/StageEnvLatLong.exr"},
+  };
+  char dir_template[] = "/tmp/probelight_four_views_XXXXXX";
+  ASSERT_NE(mkdtemp(dir_template), nullptr);
+  const std::filesystem::path dir(dir_template);
+  sim::CameraPathConfig path;
+  path.name = "random";
+  const std::vector<std::uint64_t> frames = {0, 1, 2, 3};
+
+  auto readIrradiance = [](const std::filesystem::path& out, const char* key) {
+    std::ifstream in(out / "analysis.json");
+    const nlohmann::json analysis = nlohmann::json::parse(in);
+    std::vector<std::pair<glm::dvec3, glm::dvec3>> entries;
+    for (const auto& entry : analysis.at(key))
+      entries.push_back({glm::dvec3(entry.at("normal")[0], entry.at("normal")[1], entry.at("normal")[2]),
+                         glm::dvec3(entry.at("rgb")[0], entry.at("rgb")[1], entry.at("rgb")[2])});
+    return entries;
+  };
+  auto errorAgainst = [](const std::vector<std::pair<glm::dvec3, glm::dvec3>>& entries, const auto& truth) {
+    double sum = 0.0;
+    for (const auto& [normal, rgb] : entries) {
+      const double expected = luminance(truth(normal));
+      sum += std::abs(luminance(rgb) - expected) / expected;
+    }
+    return entries.empty() ? 1.0 : sum / entries.size();
+  };
+  auto analyze = [&](const AnalyzeOptions& options) {
+    std::ostringstream log;
+    const Status status = runAnalyze(options, log);
+    EXPECT_TRUE(status.isOk()) << status.message() << "\n" << log.str();
+  };
+
+  std::printf("\n| world | bracketed: 4 views / view alone (mean, worst) | 8-bit: 4 views / view alone (mean) |\n|---|---|---|\n");
+  double bracketed_sum = 0.0, bracketed_worst = 0.0, ldr_sum = 0.0, ldr_single_sum = 0.0, single_sum = 0.0;
+  int single_count = 0;
+  for (const WorldCase& world_case : worlds) {
+    glm::dvec3 blind_w;
+    const sim::SceneConfig scene = sceneWithLightBehindTheBall(world_case, path, frames.front(), blind_w);
+    const sim::World world(scene);
+    config::saveCameraFile((dir / "camera.yaml").string(), scene.camera);
+    RigGeometry rig = scene.rig;
+    rig.post_radius_m = scene.post_radius_m;
+    config::saveRigFile((dir / "rig.yaml").string(), rig);
+    AnalyzeOptions bracketed, eight_bit;
+    for (AnalyzeOptions* options : {&bracketed, &eight_bit}) {
+      options->camera_path = (dir / "camera.yaml").string();
+      options->rig_path = (dir / "rig.yaml").string();
+    }
+    bracketed.out_dir = (dir / "bracketed").string();
+    eight_bit.out_dir = (dir / "eight_bit").string();
+    eight_bit.white_reference = false;
+    std::vector<AnalyzeOptions> alone;
+    for (const std::uint64_t frame : frames) {
+      ImageRGB8 reference;
+      FrameTruth truth;
+      world.render(frame, reference, truth);
+      ASSERT_TRUE(truth.probe_fully_visible && truth.tag_fully_visible) << world_case.label << " " << frame;
+      const tracking::TagTrackResult track = testing::trackRendered(scene, reference);
+      ASSERT_TRUE(track.found) << track.status;
+      const ibl::MirrorBallView ball{scene.camera, track.pose, scene.rig.probe_center_w, scene.rig.probe_radius_m};
+      std::vector<ImageRGB8> images;
+      std::vector<double> evs;
+      testing::renderBracketUntilBallUnclipped(world, frame, reference, ibl::computeProbeOutline(ball),
+                                               ibl::HdrMergeSettings{}.clip_code, images, evs);
+      AnalyzeView view;
+      for (std::size_t i = 0; i < images.size(); ++i) {
+        const std::string name = "view" + std::to_string(frame) + "_ev" + std::to_string(static_cast<int>(evs[i])) + ".png";
+        std::string error;
+        ASSERT_TRUE(writeRgbPng((dir / name).string(), images[i], error)) << error;
+        if (i == 0)
+          view.frame_path = (dir / name).string();
+        else
+          view.brackets.push_back({(dir / name).string(), evs[i], false});
+      }
+      if (bracketed.frame_path.empty()) {
+        bracketed.frame_path = eight_bit.frame_path = view.frame_path;
+        bracketed.brackets = view.brackets;
+      } else {
+        bracketed.more_views.push_back(view);
+        eight_bit.more_views.push_back({view.frame_path, {}});
+      }
+      AnalyzeOptions one = eight_bit;
+      one.frame_path = view.frame_path;
+      one.more_views.clear();
+      one.out_dir = (dir / ("alone" + std::to_string(frame))).string();
+      AnalyzeOptions one_bracketed = one;
+      one_bracketed.brackets = view.brackets;
+      one_bracketed.white_reference = true;
+      one_bracketed.out_dir += "_bracketed";
+      alone.push_back(one);
+      alone.push_back(one_bracketed);
+    }
+    auto hdrTruth = [&](const glm::dvec3& n) { return world.irradiance(n, 0).hdr; };
+    auto clippedTruth = [&](const glm::dvec3& n) { return world.irradiance(n, 0).clipped; };
+    analyze(bracketed);
+    analyze(eight_bit);
+    const double bracketed_error = errorAgainst(readIrradiance(bracketed.out_dir, "irradiance"), hdrTruth);
+    const double ldr_error = errorAgainst(readIrradiance(eight_bit.out_dir, "irradiance"), clippedTruth);
+    double single_mean = 0.0, single_worst = 0.0, ldr_single_mean = 0.0;
+    for (std::size_t i = 0; i < alone.size(); i += 2) {
+      analyze(alone[i]);
+      analyze(alone[i + 1]);
+      const double ldr = errorAgainst(readIrradiance(alone[i].out_dir, "irradiance"), clippedTruth);
+      const double hdr = errorAgainst(readIrradiance(alone[i + 1].out_dir, "irradiance"), hdrTruth);
+      ldr_single_mean += ldr / frames.size();
+      single_mean += hdr / frames.size();
+      single_worst = std::max(single_worst, hdr);
+      ldr_single_sum += ldr;
+      single_sum += hdr;
+      ++single_count;
+    }
+    std::printf("| %s | %.1f%% / %.1f%%, %.1f%% | %.1f%% / %.1f%% |\n", world_case.label, 100.0 * bracketed_error,
+                100.0 * single_mean, 100.0 * single_worst, 100.0 * ldr_error, 100.0 * ldr_single_mean);
+    std::fflush(stdout);
+    bracketed_sum += bracketed_error;
+    bracketed_worst = std::max(bracketed_worst, bracketed_error);
+    ldr_sum += ldr_error;
+  }
+  const double bracketed_mean = bracketed_sum / worlds.size(), ldr_mean = ldr_sum / worlds.size();
+  const double ldr_single_mean = ldr_single_sum / single_count;
+  std::printf("\nanalyze, four views: bracketed mean %.2f%%, worst %.2f%% (views alone %.2f%%); 8-bit mean %.2f%% "
+              "(views alone %.2f%%)\n",
+              100.0 * bracketed_mean, 100.0 * bracketed_worst, 100.0 * single_sum / single_count, 100.0 * ldr_mean,
+              100.0 * ldr_single_mean);
+  EXPECT_LE(bracketed_mean, 0.03);
+  EXPECT_LE(bracketed_worst, 0.08);
+  EXPECT_LE(ldr_mean, ldr_single_mean);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -646,6 +646,47 @@ TEST_F(Analyze, FrameOfAnotherSizeIsExit2NamingBothSizes) {
   EXPECT_NE(result.stderr_text.find("640x480"), std::string::npos) << result.stderr_text;
 }
 
+// --frame again (issue 18): a second view of the rig is merged; views that
+// cannot be used (missing, another size, no tag) are left out, each with
+// its reason in analysis.json and one warning, and the run still succeeds.
+TEST_F(Analyze, FurtherViewsAreMergedAndUnusableOnesLeftOutSayingWhy) {
+  sim::SceneConfig scene = sim::defaultScene();
+  scene.environment = "sun_sky";
+  scene.camera_path.name = "random";
+  const sim::World world(scene);
+  ImageRGB8 first, second;
+  FrameTruth truth;
+  world.render(0, first, truth);
+  world.render(1, second, truth);
+  const std::string command = writeInputs(scene, first);
+  cv::Mat second_bgr;
+  cv::cvtColor(cv::Mat(second.height, second.width, CV_8UC3, second.pixels.data()), second_bgr, cv::COLOR_RGB2BGR);
+  ASSERT_TRUE(cv::imwrite((dir_ / "second.png").string(), second_bgr));
+  ASSERT_TRUE(cv::imwrite((dir_ / "small.png").string(), cv::Mat(240, 320, CV_8UC3, cv::Scalar(90, 90, 90))));
+  ASSERT_TRUE(cv::imwrite((dir_ / "blank.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(90, 90, 90))));
+  const CommandResult result =
+      run(command + " --frame " + (dir_ / "second.png").string() + " --frame " + (dir_ / "missing.png").string() +
+          " --frame " + (dir_ / "small.png").string() + " --frame " + (dir_ / "blank.png").string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json analysis = readAnalysis();
+  expectAllFinite(analysis["irradiance"]);
+  const nlohmann::json& views = analysis.at("views");
+  EXPECT_EQ(views.at("given"), 5);
+  EXPECT_EQ(views.at("used"), 2);
+  const nlohmann::json& each = views.at("each");
+  ASSERT_EQ(each.size(), 5u);
+  EXPECT_TRUE(each[1].at("used").get<bool>());
+  EXPECT_GT(each[1].at("texels_merged").get<long>(), 0) << "the second view saw what the first saw";
+  for (int i : {2, 3, 4}) EXPECT_FALSE(each[i].at("used").get<bool>()) << each[i];
+  EXPECT_NE(each[2].at("reason").get<std::string>().find("missing.png"), std::string::npos) << each[2];
+  EXPECT_NE(each[3].at("reason").get<std::string>().find("320x240"), std::string::npos) << each[3];
+  EXPECT_NE(each[4].at("reason").get<std::string>().find("no tag"), std::string::npos) << each[4];
+  // One warning line per view left out.
+  long warnings = 0;
+  for (std::size_t at = 0; (at = result.stderr_text.find("left out", at)) != std::string::npos; ++at) ++warnings;
+  EXPECT_EQ(warnings, 3) << result.stderr_text;
+}
+
 TEST_F(Analyze, BadFlagsAndFilesAreExit2OneLine) {
   config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
   cv::imwrite((dir_ / "grey.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(128, 128, 128)));

@@ -144,12 +144,44 @@ TEST(CommandLine, ARepeatedFlagTakesItsLastValue) {
   EXPECT_EQ(options.out_dir, "b");
   EXPECT_EQ(options.source, "sim");
   const AnalyzeOptions analyze =
-      parseAnalyzeOptions({"--frame", "a.png", "--frame", "b.png", "--camera", "c.yaml", "--rig", "r.yaml", "--out", "o",
+      parseAnalyzeOptions({"--frame", "a.png", "--camera", "x.yaml", "--camera", "c.yaml", "--rig", "r.yaml", "--out", "o",
                            "--bracket", "u3.png@-3", "--bracket=o2.png@2"});
-  EXPECT_EQ(analyze.frame_path, "b.png");
+  EXPECT_EQ(analyze.camera_path, "c.yaml");
   ASSERT_EQ(analyze.brackets.size(), 2u) << "--bracket adds one each time";
   EXPECT_EQ(analyze.brackets[0].path, "u3.png");
   EXPECT_EQ(analyze.brackets[1].ev, 2.0);
+}
+
+// --frame again is another view (issue 18); each --bracket belongs to the
+// --frame before it, one before any --frame to the first, whatever the
+// spelling (-f X, --frame X, --frame=X; --bracket X, --bracket=X).
+TEST(CommandLine, EachFrameTakesTheBracketsAfterIt) {
+  const AnalyzeOptions analyze = parseAnalyzeOptions(
+      {"--bracket", "a3.png@-3", "--frame", "a.png", "--camera", "c.yaml", "-f", "b.png", "--bracket=b3.png@-3",
+       "--rig", "r.yaml", "--bracket", "b6.png@-6", "--frame=c.png", "--out", "o", "-f", "d.png", "--bracket",
+       "d3.png@-3"});
+  EXPECT_EQ(analyze.frame_path, "a.png");
+  ASSERT_EQ(analyze.brackets.size(), 1u);
+  EXPECT_EQ(analyze.brackets[0].path, "a3.png");
+  ASSERT_EQ(analyze.more_views.size(), 3u);
+  EXPECT_EQ(analyze.more_views[0].frame_path, "b.png");
+  ASSERT_EQ(analyze.more_views[0].brackets.size(), 2u);
+  EXPECT_EQ(analyze.more_views[0].brackets[0].path, "b3.png");
+  EXPECT_EQ(analyze.more_views[0].brackets[1].ev, -6.0);
+  EXPECT_EQ(analyze.more_views[1].frame_path, "c.png");
+  EXPECT_TRUE(analyze.more_views[1].brackets.empty());
+  EXPECT_EQ(analyze.more_views[2].frame_path, "d.png");
+  ASSERT_EQ(analyze.more_views[2].brackets.size(), 1u);
+  EXPECT_EQ(analyze.more_views[2].brackets[0].path, "d3.png");
+  // More than 16 views is refused.
+  std::vector<std::string> args = {"--camera", "c.yaml", "--rig", "r.yaml", "--out", "o"};
+  for (int i = 0; i < 17; ++i) args.insert(args.end(), {"--frame", "f" + std::to_string(i) + ".png"});
+  try {
+    parseAnalyzeOptions(args);
+    ADD_FAILURE() << "17 views accepted";
+  } catch (const UsageError& error) {
+    EXPECT_NE(std::string(error.what()).find("at most 16 views, got 17"), std::string::npos) << error.what();
+  }
 }
 
 // An EV of 1e-300 passed the old "non-zero" check, and 40 frames of one
