@@ -42,6 +42,7 @@
 #include "ibl/probe_observation.hpp"
 #include "ibl/probe_outline.hpp"
 #include "ibl/probe_to_cube.hpp"
+#include "stages/probe_merge.hpp"
 #include "ibl/ground_shadow.hpp"
 #include "ibl/hdr_bracket.hpp"
 #include "ibl/light_dome.hpp"
@@ -440,6 +441,102 @@ void probeToCube(benchmark::State& state, bool eight_bit, int face_size, int ite
     next = (next + 1) % s.frames.size();
   }
   setCounters(state, row);
+}
+
+// The kiosk's merge as it runs at each map update (stages/maps_stage with
+// environment_maps.merge_views): the reflection map just made read back,
+// merged with the frame around the ball (stages/probe_merge), and the
+// merged probe uploaded as the reflection map. The pass that made the map is
+// probe_to_cube's row, left out here (timing paused, the GPU finished).
+// Error: as probe_merge's rows, the merged probe as the GPU holds it.
+void probeMergeKiosk(benchmark::State& state, bool eight_bit) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  const gles::Capabilities& capabilities = eight_bit ? s.capabilities_8bit : s.capabilities_full;
+  constexpr int kFace = 64;
+  std::string error;
+  FrameTextures frames;
+  passes::EnvironmentMaps maps;
+  passes::EnvironmentMapSettings settings;
+  settings.reflection_face_size = kFace;
+  if (!frames.init(capabilities, error) || !maps.init(capabilities, settings, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  RigGeometry rig = s.scene.rig;
+  rig.post_radius_m = s.scene.post_radius_m;
+  std::vector<FrameBuffer> pixels(s.frames.size());
+  for (std::size_t f = 0; f < s.frames.size(); ++f) {
+    pixels[f].rgb = s.frames[f].rgb;
+    pixels[f].finishRgb();
+  }
+  // One map update's merge; false with `error` when the GPU failed.
+  // Each part's time (the read-back, the merge, the upload), summed.
+  double part_ms[3] = {0.0, 0.0, 0.0};
+  auto mergeOne = [&](ProbeMerge& probe, std::size_t f) {
+    using Clock = std::chrono::steady_clock;
+    auto ms = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
+    const Clock::time_point start = Clock::now();
+    std::vector<float> validity;
+    const std::optional<ibl::CubeMapRGB> map = maps.readReflection(error, &validity);
+    if (!map) return false;
+    const Clock::time_point read = Clock::now();
+    probe.addView(s.frames[f].view, *map, &validity, nullptr, 1.0, &pixels[f]);
+    const Clock::time_point merged = Clock::now();
+    const std::vector<float> merged_validity = probe.validity();
+    const bool uploaded = maps.setReflection(probe.liveMap(), error, &merged_validity);
+    glFinish();
+    part_ms[0] += ms(start, read);
+    part_ms[1] += ms(read, merged);
+    part_ms[2] += ms(merged, Clock::now());
+    return uploaded;
+  };
+  const std::string name = std::string("probe_merge/kiosk/") + (eight_bit ? "8bit" : "half") + "/face:64";
+  bool failed = false;
+  const ErrorRow& row = errorsFor(name, [&] {
+    ErrorRow r;
+    ProbeMerge probe(ibl::CameraTransfer{}, rig, kFace);
+    for (std::size_t f = 0; f < s.frames.size() && !failed; ++f)
+      failed = !maps.updateReflection(*frames.textures[f], s.frames[f].view, rig.probe_reflectance, error) ||
+               !mergeOne(probe, f);
+    std::vector<float> validity;
+    const std::optional<ibl::CubeMapRGB> held = failed ? std::nullopt : maps.readReflection(error, &validity);
+    if (!held) {
+      failed = true;
+      return r;
+    }
+    double merged_error = 0.0;
+    for (int i = 0; i < 5; ++i) {
+      const double truth = s.irradiance_truth[i];
+      merged_error += std::abs(luminance(ibl::irradianceFromCubeMap(*held, kNormals[i])) - truth) / truth / 5.0;
+    }
+    r.values = {{"merged_err_pct", 100.0 * merged_error}, {"seen_pct", 100.0 * probe.accumulator().seenSolidAngleFraction()}};
+    return r;
+  });
+  if (failed) {
+    errorTable().erase(name);
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  ProbeMerge probe(ibl::CameraTransfer{}, rig, kFace);
+  std::size_t next = 0;
+  part_ms[0] = part_ms[1] = part_ms[2] = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    const bool made = maps.updateReflection(*frames.textures[next], s.frames[next].view, rig.probe_reflectance, error);
+    glFinish();
+    state.ResumeTiming();
+    if (!made || !mergeOne(probe, next)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    next = (next + 1) % s.frames.size();
+  }
+  setCounters(state, row);
+  const double iterations = std::max<double>(1.0, static_cast<double>(state.iterations()));
+  state.counters["read_ms"] = part_ms[0] / iterations;
+  state.counters["merge_ms"] = part_ms[1] / iterations;
+  state.counters["upload_ms"] = part_ms[2] / iterations;
 }
 
 // ---------------------------------------------------------------------------
@@ -1301,6 +1398,12 @@ void registerAll() {
   for (bool use_frame : {false, true})
     benchmark::RegisterBenchmark((std::string("probe_merge/") + (use_frame ? "ball+frame" : "ball") + "/face:64").c_str(),
                                  [=](benchmark::State& state) { probeMerge(state, use_frame); })
+        ->Unit(kMillisecond)
+        ->UseRealTime()
+        ->MinTime(kMinTime);
+  for (bool eight_bit : {false, true})
+    benchmark::RegisterBenchmark((std::string("probe_merge/kiosk/") + (eight_bit ? "8bit" : "half") + "/face:64").c_str(),
+                                 [=](benchmark::State& state) { probeMergeKiosk(state, eight_bit); })
         ->Unit(kMillisecond)
         ->UseRealTime()
         ->MinTime(kMinTime);

@@ -26,14 +26,13 @@
 #include "ibl/hdr_bracket.hpp"
 #include "ibl/irradiance.hpp"
 #include "ibl/lighting_fit.hpp"
-#include "ibl/probe_accumulator.hpp"
-#include "ibl/probe_observation.hpp"
 #include "model/gltf_loader.hpp"
 #include "stages/bracket_merge.hpp"
 #include "stages/compose_stage.hpp"
 #include "stages/frame_context.hpp"
 #include "stages/lighting_report.hpp"
 #include "stages/maps_stage.hpp"
+#include "stages/probe_merge.hpp"
 #include "stages/run_report.hpp"
 #include "stages/scene_object.hpp"
 #include "stages/shadows_stage.hpp"
@@ -246,8 +245,9 @@ class Analyzer {
     if (settings_.maps.force_8bit) capabilities_ = capabilities_.withoutExtensions();
     json_["gl"] = capabilities_.summary();
     upload_ = std::make_unique<UploadStage>(report_, settings_.gpu_finish);
-    maps_ = std::make_unique<MapsStage>(settings_, rig_.probe_reflectance,
-                                        object_.readsGlossy(glossyExponents(settings_)), report_);
+    // Its views are merged by mergeViews, not frame by frame.
+    maps_ = std::make_unique<MapsStage>(settings_, rig_, object_.readsGlossy(glossyExponents(settings_)), false,
+                                        report_);
     PROBELIGHT_TRY(upload_->init(capabilities_));
     PROBELIGHT_TRY(maps_->init(capabilities_));
     for (int run = 0; run < 2; ++run) {
@@ -335,14 +335,7 @@ class Analyzer {
   Status mergeViews() {
     const auto start = std::chrono::steady_clock::now();
     const ibl::HdrMergeSettings merge{settings_.maps.stages.camera_transfer};
-    const double clip_level = ibl::clippedMapLevel(merge, rig_.probe_reflectance);
-    ibl::ProbeAccumulatorSettings probe_settings;
-    probe_settings.face_size = reflection_->face_size;
-    probe_settings.noise.camera_transfer = settings_.maps.stages.camera_transfer;
-    probe_settings.noise.probe_reflectance = rig_.probe_reflectance;
-    probe_settings.noise.clip_level = clip_level;
-    ibl::ProbeAccumulator probe(probe_settings);
-    const ibl::ObservationSettings observation_settings;
+    ProbeMerge probe(settings_.maps.stages.camera_transfer, rig_, reflection_->face_size);
     bool any_bracket = bracket_map_.has_value();
     Json views = Json::array();
 
@@ -350,26 +343,13 @@ class Analyzer {
     auto addView = [&](const FrameBuffer& frame, const ibl::MirrorBallView& view, const ibl::CubeMapRGB& map,
                        const std::vector<float>& validity, const std::vector<std::uint8_t>* still_clipped,
                        double to_first_exposure, Json& entry) {
-      ibl::ProbeObservation observed =
-          ibl::observeBall(view, map, &validity, still_clipped, clip_level, observation_settings);
-      const ibl::LinearPixelReader read = [&](int x, int y, bool& clipped) {
-        const glm::u8vec3 code = frame.rgbAt(x, y);
-        clipped = std::max({code.r, code.g, code.b}) >= merge.clip_code;
-        const ibl::CameraTransfer& transfer = settings_.maps.stages.camera_transfer;
-        return glm::dvec3(ibl::decodeCameraValue(transfer, code.r / 255.0), ibl::decodeCameraValue(transfer, code.g / 255.0),
-                          ibl::decodeCameraValue(transfer, code.b / 255.0));
-      };
-      const long frame_texels = ibl::addFrameAroundBall(observed, view, rig_, read, observation_settings);
-      if (to_first_exposure != 1.0)
-        for (auto& face : observed.radiance.faces)
-          for (glm::vec3& texel : face) texel *= static_cast<float>(to_first_exposure);
-      const ibl::AccumulateCounts counts = probe.add(observed);
-      entry["texels_seen"] = counts.seen;
-      entry["texels_first_seen"] = counts.first;
-      entry["texels_merged"] = counts.merged;
-      entry["texels_changed"] = counts.changed;
-      entry["texels_from_frame_around_ball"] = frame_texels;
-      entry["probe_seen_sphere_fraction"] = probe.seenSolidAngleFraction();
+      const ProbeViewCounts counts = probe.addView(view, map, &validity, still_clipped, to_first_exposure, &frame);
+      entry["texels_seen"] = counts.merge.seen;
+      entry["texels_first_seen"] = counts.merge.first;
+      entry["texels_merged"] = counts.merge.merged;
+      entry["texels_changed"] = counts.merge.changed;
+      entry["texels_from_frame_around_ball"] = counts.texels_from_frame_around_ball;
+      entry["probe_seen_sphere_fraction"] = probe.accumulator().seenSolidAngleFraction();
     };
 
     Json first = {{"frame", options_.frame_path}, {"used", true}, {"bracket", bracket_map_.has_value()}};
@@ -464,11 +444,11 @@ class Analyzer {
     // The merged probe as the maps: the 8-bit map what the camera shows
     // (clamped at its clip level), the HDR map all of it.
     const std::vector<float> validity = probe.validity();
-    reflection_ = probe.radianceMap(static_cast<float>(clip_level));
+    reflection_ = probe.liveMap();
     reflection_validity_ = validity;
     if (any_bracket) {
-      bracket_map_ = probe.radianceMap();
-      bracket_still_clipped_ = probe.lowerBounds();
+      bracket_map_ = probe.hdrMap();
+      bracket_still_clipped_ = probe.accumulator().lowerBounds();
     }
     PROBELIGHT_TRY(maps_->setProbe(*reflection_, validity));
     std::string error;
@@ -481,7 +461,7 @@ class Analyzer {
     for (const Json& view : views) used += view["used"].get<bool>() ? 1 : 0;
     json_["views"] = {{"given", views.size()},
                       {"used", used},
-                      {"probe_seen_sphere_fraction", probe.seenSolidAngleFraction()},
+                      {"probe_seen_sphere_fraction", probe.accumulator().seenSolidAngleFraction()},
                       {"ms", std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count()},
                       {"each", views}};
     return Status::ok();

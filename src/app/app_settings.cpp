@@ -55,6 +55,7 @@ AppSettings loadAppSettings(const std::string& path) {
   const std::string method = maps.readString("diffuse_method", "cosine", {"cosine", "sh9"});
   settings.maps.diffuse_method = method == "sh9" ? DiffuseMethod::kSH9 : DiffuseMethod::kCosinePasses;
   settings.maps.force_8bit = maps.readBool("force_8bit", settings.maps.force_8bit);
+  settings.maps.merge_views = maps.readBool("merge_views", settings.maps.merge_views);
   maps.rejectUnknownFields();
 
   ConfigReader tracking = file.section("tracking");
@@ -215,6 +216,8 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.seed = sim.readInt("seed", settings.sim.seed, Range::atLeast(0));
   settings.sim.sun_azimuth_rate_deg_per_frame = sim.readDouble(
       "sun_azimuth_rate_deg_per_frame", settings.sim.sun_azimuth_rate_deg_per_frame, Range::closed(-90.0, 90.0));
+  settings.sim.environment_rotation_deg = sim.readDouble("environment_rotation_deg", settings.sim.environment_rotation_deg,
+                                                        Range::closed(-360.0, 360.0));
   settings.sim.lamp_on_frame = sim.readInt("lamp_on_frame", settings.sim.lamp_on_frame, Range::atLeast(-1));
   settings.sim.lamp_off_frame = sim.readInt("lamp_off_frame", settings.sim.lamp_off_frame, Range::atLeast(-1));
   settings.sim.ball_offset_m = sim.readVec3("ball_offset", settings.sim.ball_offset_m, Range::closed(-0.1, 0.1));

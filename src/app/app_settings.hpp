@@ -21,6 +21,9 @@ struct SimConfig {
   // Lighting that changes during the run (for testing map refresh and
   // recalibration): the environment turning, and a lamp switching.
   double sun_azimuth_rate_deg_per_frame = 0.0;
+  // The whole environment turned about +Z (counter-clockwise from above):
+  // to put its brightest light where a view's ball cannot see it.
+  double environment_rotation_deg = 0.0;
   int lamp_on_frame = -1;   // -1: never
   int lamp_off_frame = -1;  // -1: stays on
   // Where the simulated ball really sits relative to rig.yaml's probe_center

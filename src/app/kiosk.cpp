@@ -158,7 +158,7 @@ class Kiosk {
     PROBELIGHT_TRY(show(ctx.track, ctx.status, ctx.number));
     last_track_ = ctx.track;
     last_frame_number_ = ctx.number;
-    if (truth_) truth_->observe(ctx, *maps_);
+    if (truth_) truth_->observe(ctx, *maps_, lights_->sceneLighting());
     if (!options_.capture_dir.empty()) last_pipeline_frame_ = ctx.frame.toRgb();
     return Status::ok();
   }
@@ -304,6 +304,8 @@ class Kiosk {
     if (!source_->streamDescription().empty())
       log_ << "probelight: " << source_->name() << ": " << source_->streamDescription() << "\n";
     lights_->loadStoredLighting();
+    if (const std::string warning = maps_->loadStoredProbe(settings.state.dir); !warning.empty())
+      log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << warning << "; starting without it\n";
     return Status::ok();
   }
 
@@ -361,6 +363,7 @@ class Kiosk {
     scene.noise_sigma_code = settings.sim.noise_sigma;
     scene.seed = static_cast<std::uint64_t>(settings.sim.seed);
     scene.lighting.sun_azimuth_rate_deg_per_frame = settings.sim.sun_azimuth_rate_deg_per_frame;
+    scene.environment_rotation_deg = settings.sim.environment_rotation_deg;
     scene.lighting.lamp_on_frame = settings.sim.lamp_on_frame;
     scene.lighting.lamp_off_frame = settings.sim.lamp_off_frame;
     if (inputs_.camera_from_file) scene.camera = inputs_.camera;
@@ -399,8 +402,8 @@ class Kiosk {
         log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << warning << "\n";
     upload_ = std::make_unique<UploadStage>(report_, settings.gpu_finish);
     track_ = std::make_unique<TrackStage>(settings, inputs_.rig, inputs_.camera, report_);
-    maps_ = std::make_unique<MapsStage>(settings, inputs_.rig.probe_reflectance,
-                                        object.readsGlossy(glossyExponents(settings)), report_);
+    maps_ = std::make_unique<MapsStage>(settings, inputs_.rig, object.readsGlossy(glossyExponents(settings)),
+                                        settings.maps.merge_views, report_);
     lights_ = std::make_unique<LightsStage>(settings, inputs_.rig, inputs_.camera, *source_, report_, log_);
     shadows_ = std::make_unique<ShadowsStage>(settings, object.shape, report_);
     compose_ = std::make_unique<ComposeStage>(object, inputs_.camera, inputs_.rig, settings.maps.stages.camera_transfer,

@@ -85,6 +85,11 @@ ProbeAccumulator::ProbeAccumulator(ProbeAccumulatorSettings settings)
   if (settings_.face_size < 1) throw std::invalid_argument("probe accumulator: face_size must be >= 1");
   if (!(settings_.memory_views >= 1.0) || !(settings_.change_sigmas > 0.0) || settings_.max_search_texels < 1)
     throw std::invalid_argument("probe accumulator: memory_views >= 1, change_sigmas > 0, max_search_texels >= 1");
+  const int n = settings_.face_size;
+  texel_solid_angle_sr_.resize(static_cast<std::size_t>(n) * n);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x)
+      texel_solid_angle_sr_[static_cast<std::size_t>(y) * n + x] = static_cast<float>(cubeTexelSolidAngle(x, y, n));
   clear();
 }
 
@@ -203,7 +208,9 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
         if (replace[j] || !seenByView(j) || texels_[j].a == 0.0f) continue;
         const double estimate = lum(glm::vec3(texels_[j])), value = view_lum[j];
         const double noise = quadratureSum(noise_.sigma(estimate), noise_.sigma(value));
-        if (std::abs(value - estimate) > k * noise) {
+        // A clipped sample says "at least": it differs only when above.
+        const double difference = view.lower_bound[j] ? value - estimate : std::abs(value - estimate);
+        if (difference > k * noise) {
           replace[j] = 1;
           open.push_back(j);
         }
@@ -260,6 +267,10 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
     }
   }
   return counts;
+}
+
+void ProbeAccumulator::demoteToLowerBound(std::size_t texel) {
+  if (texel < texels_.size()) texels_[texel].a = -std::abs(texels_[texel].a);
 }
 
 double ProbeAccumulator::seenSolidAngleFraction() const {

@@ -134,6 +134,9 @@ class ProbeAccumulator {
   void clear();
   // Every radiance times `factor` (> 0, finite): the reference exposure moved.
   void scaleRadiance(double factor);
+  // The kept estimate of `texel` becomes a lower bound (a caller knows its
+  // samples were biased low: read beside clipped pixels). Unseen: nothing.
+  void demoteToLowerBound(std::size_t texel);
 
   int faceSize() const { return settings_.face_size; }
   const ProbeAccumulatorSettings& settings() const { return settings_; }
@@ -145,6 +148,9 @@ class ProbeAccumulator {
   glm::vec3 radiance(std::size_t texel) const { return glm::vec3(texels_[texel]); }
   float confidence(std::size_t texel) const { return std::abs(texels_[texel].a); }
   bool lowerBound(std::size_t texel) const { return texels_[texel].a < 0.0f; }
+  float solidAngleSr(std::size_t texel) const {
+    return texel_solid_angle_sr_[texel % texel_solid_angle_sr_.size()];
+  }
 
   // The radiance as a cube map (0 where unseen), each channel at most
   // `clamp_level` (the live maps hold what an 8-bit camera shows; the rest
@@ -165,6 +171,7 @@ class ProbeAccumulator {
   ProbeAccumulatorSettings settings_;
   NoiseLookup noise_;
   std::vector<glm::vec4> texels_;
+  std::vector<float> texel_solid_angle_sr_;  // by position on a face (the same on every face)
   long seen_texels_ = 0;
   // add()'s working storage, kept from view to view.
   std::vector<float> view_luminance_;

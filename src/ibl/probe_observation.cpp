@@ -143,7 +143,8 @@ class ConfidenceByHalfAngle {
   std::vector<float> table_;
 };
 
-// Texel-centre directions of a cube face size, made once per size.
+}  // namespace
+
 const std::vector<glm::vec3>& texelDirections(int n) {
   static std::mutex guard;
   static std::map<int, std::vector<glm::vec3>> by_size;
@@ -157,8 +158,6 @@ const std::vector<glm::vec3>& texelDirections(int n) {
         directions[(static_cast<std::size_t>(face) * n + y) * n + x] = glm::vec3(cubeTexelCenterDirection(face, x, y, n));
   return by_size.emplace(n, std::move(directions)).first->second;
 }
-
-}  // namespace
 
 double ballSampleConfidence(const MirrorBallView& view, const glm::dvec3& r_w, double texel_angle_rad,
                             const ObservationSettings& settings) {

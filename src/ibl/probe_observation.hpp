@@ -65,6 +65,10 @@ struct ObservationSettings {
   double exclusion_margin_px = 2.0;
 };
 
+// The texel-centre directions of a cube of face size n (face-major, as the
+// probe's texels), made once per size and shared.
+const std::vector<glm::vec3>& texelDirections(int n);
+
 // Confidence of the ball's sample of direction r_w (unit) in `view`
 // (0 where the ball does not show it).
 double ballSampleConfidence(const MirrorBallView& view, const glm::dvec3& r_w, double texel_angle_rad,

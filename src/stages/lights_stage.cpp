@@ -114,14 +114,14 @@ FrameAdmission LightsStage::admit(const FrameContext& ctx) {
   return {false, "Recalibrating lights: exposure bracket"};
 }
 
-Status LightsStage::afterKeptFrame(const FrameContext& ctx, const MapsStage& maps) {
+Status LightsStage::afterKeptFrame(const FrameContext& ctx, MapsStage& maps) {
   if (!bracket_frames_) return Status::ok();  // settling after a bracket
   bracket_frames_->own_s += secondsSince(admitted_);
   if (!bracket_over_) return Status::ok();
   return finishBracket(ctx.number, maps);
 }
 
-Status LightsStage::finishPendingBracket(std::uint64_t frame_number, const MapsStage& maps) {
+Status LightsStage::finishPendingBracket(std::uint64_t frame_number, MapsStage& maps) {
   if (!bracket_.pending()) return Status::ok();
   return finishBracket(frame_number, maps);
 }
@@ -129,7 +129,7 @@ Status LightsStage::finishPendingBracket(std::uint64_t frame_number, const MapsS
 // ---------------------------------------------------------------------------
 // After the maps.
 
-Status LightsStage::run(FrameContext& ctx, const MapsStage& maps) {
+Status LightsStage::run(FrameContext& ctx, MapsStage& maps) {
   frame_time_s_ = ctx.time_s;
   if (ctx.maps_updated) {
     PROBELIGHT_TRY(followClippedLights(ctx.number, ctx.frame, maps));
@@ -202,7 +202,7 @@ Status LightsStage::run(FrameContext& ctx, const MapsStage& maps) {
 
 // Merges what the bracket took (nothing usable: the fit goes on with the
 // white border) and fits the lights from it.
-Status LightsStage::finishBracket(std::uint64_t frame_number, const MapsStage& maps) {
+Status LightsStage::finishBracket(std::uint64_t frame_number, MapsStage& maps) {
   const BracketRecord record = bracket_.finish();
   BracketFrames taken = std::move(*bracket_frames_);
   bracket_frames_.reset();
@@ -244,17 +244,32 @@ Status LightsStage::finishBracket(std::uint64_t frame_number, const MapsStage& m
     const std::uint8_t* p = reference.row(y) + 3 * x;
     return glm::u8vec3(p[0], p[1], p[2]);
   };
-  fit_frame.hdr = std::move(merged.hdr_cube);
   fit_frame.exposure = record.base;
+  if (merged.hdr_cube && maps.probe()) {
+    // Into the probe, where earlier views' light joins it: the fit reads
+    // the probe (fitLights).
+    const double base = record.base.exposure_us > 0.0
+                            ? exposureProduct(record.base.exposure_us, record.base.analogue_gain)
+                            : 0.0;
+    PROBELIGHT_TRY(maps.mergeBracket(taken.view, *merged.hdr_cube, merged.still_clipped, base));
+  } else {
+    fit_frame.hdr = std::move(merged.hdr_cube);
+  }
   fit_frame.exposure_locked = taken.exposure_locked;
   return fitLights(frame_number, fit_frame, maps);
 }
 
-Status LightsStage::fitLights(std::uint64_t frame_number, const FitFrame& fit_frame, const MapsStage& maps) {
+Status LightsStage::fitLights(std::uint64_t frame_number, const FitFrame& fit_frame, MapsStage& maps) {
   std::string error;
   std::vector<float> validity;
   const std::optional<ibl::CubeMapRGB> reflection = maps.maps().readReflection(error, &validity);
   if (!reflection) return Status::runtimeFailure(error);
+  // A probe over views that holds measured light above the 8-bit range (a
+  // bracket's, this one's or an earlier one's where no later view saw it
+  // change) is the fit's HDR map: the same texels as the maps, unclamped.
+  std::optional<ibl::CubeMapRGB> probe_hdr;
+  if (!fit_frame.hdr && maps.probe() && maps.probe()->holdsAboveClip()) probe_hdr = maps.probe()->hdrMap();
+  const ibl::CubeMapRGB* hdr_map = fit_frame.hdr ? &*fit_frame.hdr : probe_hdr ? &*probe_hdr : nullptr;
   const LightsConfig& config = settings_.lights;
   ibl::LightingFit fit;
   {
@@ -262,7 +277,7 @@ Status LightsStage::fitLights(std::uint64_t frame_number, const FitFrame& fit_fr
     ibl::LightingFitInputs inputs;
     inputs.map_8bit = &*reflection;
     inputs.validity = &validity;
-    inputs.hdr_map = fit_frame.hdr ? &*fit_frame.hdr : nullptr;
+    inputs.hdr_map = hdr_map;
     inputs.view = fit_frame.view;
     inputs.read_pixel = fit_frame.read_pixel;
     inputs.rig = rig_;
@@ -293,7 +308,7 @@ Status LightsStage::fitLights(std::uint64_t frame_number, const FitFrame& fit_fr
                            {"exposure_us", fit_frame.exposure.exposure_us},
                            {"analogue_gain", fit_frame.exposure.analogue_gain},
                            {"locked", fit_frame.exposure_locked}};
-  saveLighting(fit);
+  saveLighting(fit, maps);
   lights_report_ = {{"frame", frame_number},
                     {"placement", ibl::toString(config.dome.placement)},
                     {"lights", domeLightsJson<nlohmann::json>(fit.dome)},
@@ -318,7 +333,7 @@ void LightsStage::reportWhiteBorder(const ibl::LightingFit& fit) {
 }
 
 // Kept for the next start; a failed write leaves the old file whole.
-void LightsStage::saveLighting(const ibl::LightingFit& fit) {
+void LightsStage::saveLighting(const ibl::LightingFit& fit, MapsStage& maps) {
   if (settings_.state.dir.empty()) return;
   std::string error;
   const StoredLighting stored{fit.dome,           fit.dominant,           ibl::toString(settings_.lights.dome.placement),
@@ -327,6 +342,13 @@ void LightsStage::saveLighting(const ibl::LightingFit& fit) {
     report_.count("state_saves");
   else
     warn("warning: lighting not saved: " + error);
+  // And the probe the fit was made from, so that a restart starts from
+  // every view seen so far.
+  if (!maps.probe()) return;
+  if (maps.saveProbe(settings_.state.dir, error))
+    report_.count("probe_saves");
+  else
+    warn("warning: probe not saved: " + error);
 }
 
 // After each map update: each clipped light scaled by how much of it still

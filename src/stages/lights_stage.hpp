@@ -66,11 +66,12 @@ class LightsStage {
   FrameAdmission admit(const FrameContext& ctx);
   // After a frame admit() kept back has been shown: its time is the
   // bracket's, and a bracket that is over is merged and fitted.
-  Status afterKeptFrame(const FrameContext& ctx, const MapsStage& maps);
+  // (The maps take the bracket into their probe: environment_maps.merge_views.)
+  Status afterKeptFrame(const FrameContext& ctx, MapsStage& maps);
   // After the maps stage: clipped lights followed, a change in the light
   // noticed, the recalibration advanced, and the lights fitted when it
   // completes.
-  Status run(FrameContext& ctx, const MapsStage& maps);
+  Status run(FrameContext& ctx, MapsStage& maps);
 
   // A short press: true when it starts a recalibration (the maps must then
   // be made fresh); a press during one, or during its bracket, is ignored.
@@ -81,7 +82,7 @@ class LightsStage {
   void onCameraLost();
   // A bracket cut short (the run's end, a lost camera) is fitted from what
   // it has.
-  Status finishPendingBracket(std::uint64_t frame_number, const MapsStage& maps);
+  Status finishPendingBracket(std::uint64_t frame_number, MapsStage& maps);
 
   bool recalibrating() const { return machine_.state() == AppState::kRecalibrating; }
   bool bracketPending() const { return bracket_.pending(); }
@@ -118,10 +119,10 @@ class LightsStage {
   };
 
   bool startBracket(const FrameContext& ctx);
-  Status finishBracket(std::uint64_t frame_number, const MapsStage& maps);
-  Status fitLights(std::uint64_t frame_number, const FitFrame& fit_frame, const MapsStage& maps);
+  Status finishBracket(std::uint64_t frame_number, MapsStage& maps);
+  Status fitLights(std::uint64_t frame_number, const FitFrame& fit_frame, MapsStage& maps);
   void reportWhiteBorder(const ibl::LightingFit& fit);
-  void saveLighting(const ibl::LightingFit& fit);
+  void saveLighting(const ibl::LightingFit& fit, MapsStage& maps);
   Status followClippedLights(std::uint64_t frame_number, const FrameBuffer& frame, const MapsStage& maps);
   Status checkLightChange(std::uint64_t frame_number, const MapsStage& maps);
   void syncExposureLock(std::uint64_t frames_since_camera_start);

@@ -4,8 +4,10 @@
 
 #include "ibl/glossy_maps.hpp"
 #include "ibl/spherical_harmonics.hpp"
+#include "stages/clipped_light_follower.hpp"
 #include "stages/gpu_stage_timer.hpp"
 #include "stages/stage_settings.hpp"
+#include "stages/state_store.hpp"
 
 namespace probelight {
 
@@ -24,13 +26,16 @@ const char* statusFor(MapSkipReason skip) {
 
 }  // namespace
 
-MapsStage::MapsStage(const PipelineSettings& settings, double probe_reflectance, bool object_reads_glossy,
-                     RunReport& report)
+MapsStage::MapsStage(const PipelineSettings& settings, const RigGeometry& rig, bool object_reads_glossy,
+                     bool merge_views, RunReport& report)
     : settings_(settings),
-      probe_reflectance_(probe_reflectance),
+      probe_reflectance_(rig.probe_reflectance),
       object_reads_glossy_(object_reads_glossy),
       report_(report),
-      policy_(settings.map_updates) {}
+      policy_(settings.map_updates) {
+  if (merge_views)
+    probe_.emplace(settings.maps.stages.camera_transfer, rig, settings.maps.stages.reflection_face_size);
+}
 
 Status MapsStage::init(const gles::Capabilities& capabilities) {
   std::string error;
@@ -54,7 +59,7 @@ Status MapsStage::run(FrameContext& ctx, const passes::CameraFrameTexture& frame
   record(decision);
   if (const char* status = statusFor(decision.skip)) ctx.status = status;
   if (decision.update) {
-    PROBELIGHT_TRY(remake(ctx.view, frame, decision.new_weight));
+    PROBELIGHT_TRY(remake(ctx.view, frame, ctx.frame, decision.new_weight));
     maps_view_ = ctx.view;
     ctx.maps_updated = true;
   } else {
@@ -72,14 +77,108 @@ void MapsStage::skip(const std::string& reason) {
   ++skip_reasons_[reason];
 }
 
-Status MapsStage::remake(const ibl::MirrorBallView& view, const passes::CameraFrameTexture& frame, float new_weight) {
+Status MapsStage::remake(const ibl::MirrorBallView& view, const passes::CameraFrameTexture& frame,
+                         const FrameBuffer& pixels, float new_weight) {
   std::string error;
   const bool finish_gpu = settings_.gpu_finish;
   {
     GpuStageTimer timer(report_, kReflectionStageName, finish_gpu);
     if (!maps_.updateReflection(frame, view, probe_reflectance_, error)) return Status::runtimeFailure(error);
   }
-  return remakeFromReflection(new_weight);
+  if (!probe_) return remakeFromReflection(new_weight);
+  bool diffuse_due = true, glossy_due = true;
+  PROBELIGHT_TRY(mergeIntoProbe(view, pixels, diffuse_due, glossy_due));
+  static const std::string kUnchanged = "probe unchanged";
+  if (!have_maps_) diffuse_due = glossy_due = true;
+  if (!diffuse_due) report_.recordStageSkip(diffuseStageName(), kUnchanged);
+  if (!glossy_due && object_reads_glossy_) report_.recordStageSkip(kGlossyStageName, kUnchanged);
+  // The probe is its own temporal filter: its maps are not blended again.
+  return remakeFromReflection(1.0f, diffuse_due, glossy_due);
+}
+
+Status MapsStage::mergeIntoProbe(const ibl::MirrorBallView& view, const FrameBuffer& pixels, bool& diffuse_due,
+                                 bool& glossy_due) {
+  StageTimer timer(report_, kMergeStageName);
+  std::string error;
+  std::vector<float> validity;
+  const std::optional<ibl::CubeMapRGB> map = maps_.readReflection(error, &validity);
+  if (!map) return Status::runtimeFailure(error);
+  // The probe follows the camera's exposure, so that its maps are in this
+  // frame's units as a single view's are (a source that cannot say leaves
+  // it as it is).
+  if (pixels.metadata.exposure_us > 0.0)
+    probe_->followExposure(exposureProduct(pixels.metadata.exposure_us, pixels.metadata.analogue_gain));
+  const ProbeViewCounts counts = probe_->addView(view, *map, &validity, nullptr, 1.0, &pixels);
+  ++probe_views_;
+  probe_frame_texels_ += counts.texels_from_frame_around_ball;
+  probe_totals_.seen += counts.merge.seen;
+  probe_totals_.first += counts.merge.first;
+  probe_totals_.merged += counts.merge.merged;
+  probe_totals_.changed += counts.merge.changed;
+  probe_totals_.raised += counts.merge.raised;
+  probe_totals_.kept += counts.merge.kept;
+  // The diffuse map is remade once the probe's irradiance at some axis
+  // normal has moved by a quarter of a display code since the diffuse map
+  // was made from it: an 8-bit sRGB code step is about 2.4 / code relative
+  // (1% at code 240), and a change at any normal shows at least 1 / sqrt(3)
+  // of itself at the nearest axis, so 0.25% there keeps every normal below
+  // half a step. Small moves add up until they matter.
+  const std::array<double, 6> now = probe_->axisIrradiance();
+  diffuse_due = false;
+  for (int axis = 0; axis < 6; ++axis) {
+    const double at = axis_irradiance_at_diffuse_[axis];
+    if (!(std::abs(now[axis] - at) <= kInvisibleIrradianceChange * at)) diffuse_due = true;
+  }
+  // The glossy lobes are narrower: any texel moved by a noise sigma, or
+  // the diffuse map remade, remakes them.
+  glossy_due = object_reads_glossy_ && (diffuse_due || counts.merge.largest_move_sigmas >= 1.0);
+  if (!diffuse_due && !glossy_due) ++probe_views_unchanged_;
+  return showProbe();
+}
+
+Status MapsStage::showProbe() {
+  std::string error;
+  const std::vector<float> validity = probe_->validity();
+  if (!maps_.setReflection(probe_->liveMap(), error, &validity)) return Status::runtimeFailure(error);
+  return Status::ok();
+}
+
+Status MapsStage::mergeBracket(const ibl::MirrorBallView& view, const ibl::CubeMapRGB& hdr,
+                               const std::vector<std::uint8_t>& still_clipped, double exposure_product) {
+  if (!probe_) return Status::ok();
+  // On a frame the maps stage already counted (a bracket's): its time is
+  // the merge's, the diffuse and glossy passes included, so that each stage
+  // still counts every frame once.
+  StageTimer timer(report_, kMergeStageName);
+  probe_->addView(view, hdr, nullptr, &still_clipped, probe_->toProbeExposure(exposure_product), nullptr);
+  ++probe_brackets_;
+  PROBELIGHT_TRY(showProbe());
+  return remakeFromReflection(1.0f, true, true, false);
+}
+
+bool MapsStage::saveProbe(const std::string& state_dir, std::string& error) {
+  if (!probe_ || probe_->empty()) return true;
+  const StoredProbe stored{probe_->accumulator().faceSize(), probe_->exposure(), probe_->accumulator().texels()};
+  return probelight::saveProbe(state_dir, stored, error);
+}
+
+std::string MapsStage::loadStoredProbe(const std::string& state_dir) {
+  if (!probe_ || state_dir.empty()) return "";
+  std::string error;
+  const std::optional<StoredProbe> stored = loadProbe(state_dir, error);
+  probe_report_["loaded"] = false;
+  if (!stored) {
+    if (!error.empty()) probe_report_["error"] = error;
+    return error;
+  }
+  if (!probe_->restore(stored->texels, stored->exposure_product, error)) {
+    error = probeStatePath(state_dir).string() + ": field 'face_size': " + error +
+            " (environment_maps.face_size changed)";
+    probe_report_["error"] = error;
+    return error;
+  }
+  probe_report_["loaded"] = true;
+  return "";
 }
 
 Status MapsStage::setProbe(const ibl::CubeMapRGB& map, const std::vector<float>& validity) {
@@ -91,12 +190,14 @@ Status MapsStage::setProbe(const ibl::CubeMapRGB& map, const std::vector<float>&
   return remakeFromReflection(1.0f);
 }
 
-Status MapsStage::remakeFromReflection(float new_weight) {
+Status MapsStage::remakeFromReflection(float new_weight, bool diffuse, bool glossy, bool timed) {
   std::string error;
   const bool finish_gpu = settings_.gpu_finish;
   // Temporal smoothing in both methods: diffuse = w * new + (1 - w) * previous.
-  {
-    GpuStageTimer timer(report_, diffuseStageName(), finish_gpu);
+  if (diffuse) {
+    if (probe_) axis_irradiance_at_diffuse_ = probe_->axisIrradiance();
+    std::optional<GpuStageTimer> timer;
+    if (timed) timer.emplace(report_, diffuseStageName(), finish_gpu);
     if (settings_.maps.diffuse_method == DiffuseMethod::kSH9) {
       std::vector<float> validity;
       const std::optional<ibl::CubeMapRGB> reflection = maps_.readReflection(error, &validity);
@@ -108,8 +209,9 @@ Status MapsStage::remakeFromReflection(float new_weight) {
   }
   // Glossy levels only when the object's material sits between them (a
   // mirror or a matte object never reads them).
-  if (object_reads_glossy_) {
-    GpuStageTimer timer(report_, kGlossyStageName, finish_gpu);
+  if (object_reads_glossy_ && glossy) {
+    std::optional<GpuStageTimer> timer;
+    if (timed) timer.emplace(report_, kGlossyStageName, finish_gpu);
     if (!maps_.updateGlossy(error)) return Status::runtimeFailure(error);
   }
   have_maps_ = true;
@@ -129,6 +231,22 @@ void MapsStage::record(const MapUpdateDecision& decision) {
 
 void MapsStage::writeReport(nlohmann::json& report) const {
   report["map_storage"] = maps_.storageDescription();
+  if (probe_) {
+    nlohmann::json& probe = report["probe_merge"];
+    probe = probe_report_.is_null() ? nlohmann::json::object() : probe_report_;
+    probe["views"] = probe_views_;
+    probe["views_remaking_nothing"] = probe_views_unchanged_;
+    probe["brackets"] = probe_brackets_;
+    probe["texels_seen"] = probe_totals_.seen;
+    probe["texels_first_seen"] = probe_totals_.first;
+    probe["texels_merged"] = probe_totals_.merged;
+    probe["texels_changed"] = probe_totals_.changed;
+    probe["texels_raised_by_clipped"] = probe_totals_.raised;
+    probe["texels_clipped_kept"] = probe_totals_.kept;
+    probe["texels_from_frame_around_ball"] = probe_frame_texels_;
+    probe["seen_sphere_fraction"] = probe_->accumulator().seenSolidAngleFraction();
+    probe["exposure"] = probe_->exposure();
+  }
   nlohmann::json& out = report["map_updates"];
   long long updated = 0;
   long long skipped = 0;

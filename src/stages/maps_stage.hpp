@@ -5,8 +5,16 @@
 // policy says the frame shows something new (stages/map_update_policy.hpp);
 // otherwise the last good maps stay, and the frame is counted as skipped
 // with its reason.
+//
+// With environment_maps.merge_views, each remade reflection map (and the
+// frame around its ball) is merged into a probe over views
+// (stages/probe_merge.hpp), and the maps show the merged probe: the
+// directions one view hides behind its ball come from the views that saw
+// them. A view that moves no texel of the probe beyond its noise leaves the
+// diffuse and glossy maps as they are ("probe unchanged").
 #pragma once
 
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
@@ -21,6 +29,7 @@
 #include "stages/frame_context.hpp"
 #include "stages/map_update_policy.hpp"
 #include "stages/pipeline_settings.hpp"
+#include "stages/probe_merge.hpp"
 #include "stages/run_report.hpp"
 
 namespace probelight {
@@ -29,10 +38,18 @@ class MapsStage {
  public:
   static constexpr const char* kReflectionStageName = "probe_to_cube";
   static constexpr const char* kGlossyStageName = "glossy";
+  static constexpr const char* kMergeStageName = "probe_merge";
+  // A relative irradiance change at the axis normals that keeps every
+  // normal below half an 8-bit display code (see mergeIntoProbe): the
+  // diffuse map is not remade for less.
+  static constexpr double kInvisibleIrradianceChange = 0.0025;
 
   // object_reads_glossy: whether the object's material reads a glossy map
-  // (SceneObject::readsGlossy): they are made only then.
-  MapsStage(const PipelineSettings& settings, double probe_reflectance, bool object_reads_glossy, RunReport& report);
+  // (SceneObject::readsGlossy): they are made only then. merge_views: the
+  // views are merged into a probe (environment_maps.merge_views; analyze
+  // merges its views itself).
+  MapsStage(const PipelineSettings& settings, const RigGeometry& rig, bool object_reads_glossy, bool merge_views,
+            RunReport& report);
   Status init(const gles::Capabilities& capabilities);
 
   // Decides, and remakes the maps from `frame` (this frame's upload) when the
@@ -49,6 +66,18 @@ class MapsStage {
   // diffuse and glossy ones remade from it unblended.
   Status setProbe(const ibl::CubeMapRGB& map, const std::vector<float>& validity);
 
+  // merge_views: a recalibration's merged bracket (in the maps' units at
+  // `exposure_product`; still_clipped its flags) goes into the probe, and the
+  // maps are remade from it.
+  Status mergeBracket(const ibl::MirrorBallView& view, const ibl::CubeMapRGB& hdr,
+                      const std::vector<std::uint8_t>& still_clipped, double exposure_product);
+  // The merged probe (null without merge_views).
+  const ProbeMerge* probe() const { return probe_ ? &*probe_ : nullptr; }
+  // The probe kept in state.dir (stages/state_store): saved with each fit,
+  // loaded at start-up. A missing file is normal; a bad one is said (as the
+  // returned warning) and the kiosk starts without it.
+  bool saveProbe(const std::string& state_dir, std::string& error);
+  std::string loadStoredProbe(const std::string& state_dir);
   // The report names the diffuse stage after the method that runs.
   const char* diffuseStageName() const;
   bool haveMaps() const { return have_maps_; }
@@ -63,15 +92,25 @@ class MapsStage {
   void writeReport(nlohmann::json& report) const;
 
  private:
-  Status remake(const ibl::MirrorBallView& view, const passes::CameraFrameTexture& frame, float new_weight);
+  Status remake(const ibl::MirrorBallView& view, const passes::CameraFrameTexture& frame, const FrameBuffer& pixels,
+                float new_weight);
+  // The reflection map just made, merged into the probe; the probe's map
+  // replaces it. Says whether the diffuse and the glossy maps must be
+  // remade (else they already hold the probe, to within what shows).
+  Status mergeIntoProbe(const ibl::MirrorBallView& view, const FrameBuffer& pixels, bool& diffuse_due,
+                        bool& glossy_due);
+  // The probe's live map becomes the reflection map.
+  Status showProbe();
   // The diffuse map (blended by new_weight) and the glossy levels from the
-  // current reflection map.
-  Status remakeFromReflection(float new_weight);
+  // current reflection map (each only when asked; timed as their stages
+  // unless the caller times them).
+  Status remakeFromReflection(float new_weight, bool diffuse = true, bool glossy = true, bool timed = true);
   void record(const MapUpdateDecision& decision);
 
   const PipelineSettings& settings_;
   double probe_reflectance_;
   bool object_reads_glossy_;
+  std::optional<ProbeMerge> probe_;  // merge_views only
   RunReport& report_;
   passes::EnvironmentMaps maps_;
   MapUpdatePolicy policy_;
@@ -79,6 +118,12 @@ class MapsStage {
   std::optional<ibl::MirrorBallView> maps_view_;
   std::map<std::string, long long> update_causes_;
   std::map<std::string, long long> skip_reasons_;
+  nlohmann::json probe_report_;  // merge_views: totals of what the views did
+  ibl::AccumulateCounts probe_totals_;
+  // The probe's irradiance at the axis normals when the diffuse map was
+  // made from it (ProbeMerge::axisIrradiance).
+  std::array<double, 6> axis_irradiance_at_diffuse_{};
+  long long probe_views_ = 0, probe_views_unchanged_ = 0, probe_frame_texels_ = 0, probe_brackets_ = 0;
   SampleSeries center_shift_px_, radius_change_px_, rotation_change_deg_, image_change_code_;
 };
 

@@ -26,6 +26,10 @@ struct EnvironmentMapConfig {
   passes::EnvironmentMapSettings stages;
   DiffuseMethod diffuse_method = DiffuseMethod::kCosinePasses;
   bool force_8bit = false;  // ignore float render-target extensions (tests the GLES2 fallback)
+  // Each view merged into a probe over views (stages/probe_merge.hpp): what
+  // one view hides behind its ball comes from the others, and from the
+  // frame around the ball. false: each map update is its view alone.
+  bool merge_views = true;
 };
 
 struct TrackingConfig {

@@ -3,6 +3,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -10,6 +12,8 @@
 #include <sstream>
 
 #include <nlohmann/json.hpp>
+
+#include "core/file_bytes.hpp"
 
 namespace probelight {
 
@@ -209,6 +213,105 @@ std::optional<StoredLighting> loadLighting(const std::filesystem::path& state_di
     error = path.string() + ": " + e.what();
     return std::nullopt;
   }
+}
+
+// --- the probe ---------------------------------------------------------------
+
+namespace {
+
+constexpr const char* kProbeMagic = "probelight probe 1";
+// The file's floats are the host's: every board this runs on (ARM, x86) is
+// little-endian.
+static_assert(std::endian::native == std::endian::little, "probe.bin is little-endian float32");
+
+std::size_t probeTexelCount(int face_size) {
+  return 6u * static_cast<std::size_t>(face_size) * static_cast<std::size_t>(face_size);
+}
+
+}  // namespace
+
+std::filesystem::path probeStatePath(const std::filesystem::path& state_dir) { return state_dir / "probe.bin"; }
+
+bool saveProbe(const std::filesystem::path& state_dir, const StoredProbe& probe, std::string& error) {
+  if (probe.face_size < 1 || probe.face_size > kMaxStoredProbeFaceSize ||
+      probe.texels.size() != probeTexelCount(probe.face_size)) {
+    error = "probe of " + std::to_string(probe.texels.size()) + " texels is not a cube of face size " +
+            std::to_string(probe.face_size);
+    return false;
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(state_dir, ec);
+  if (ec) {
+    error = "cannot create the state directory " + state_dir.string() + ": " + ec.message();
+    return false;
+  }
+  std::ostringstream header;
+  header.precision(17);
+  header << kProbeMagic << " " << probe.face_size << " " << probe.exposure_product << "\n";
+  std::string contents = header.str();
+  const std::size_t header_size = contents.size();
+  contents.resize(header_size + probe.texels.size() * sizeof(glm::vec4));
+  std::memcpy(contents.data() + header_size, probe.texels.data(), probe.texels.size() * sizeof(glm::vec4));
+  return writeFileAtomically(probeStatePath(state_dir), contents, error);
+}
+
+std::optional<StoredProbe> loadProbe(const std::filesystem::path& state_dir, std::string& error) {
+  error.clear();
+  const std::filesystem::path path = probeStatePath(state_dir);
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return std::nullopt;
+  // The largest face size's cube, and its header.
+  const std::uint64_t max_bytes = probeTexelCount(kMaxStoredProbeFaceSize) * sizeof(glm::vec4) + 256;
+  std::vector<std::uint8_t> bytes;
+  std::string why;
+  if (!readWholeFile(path.string(), max_bytes, bytes, why)) {
+    error = path.string() + ": " + why;
+    return std::nullopt;
+  }
+  auto fail = [&](const std::string& field, const std::string& what) {
+    error = path.string() + ": field '" + field + "': " + what;
+    return std::nullopt;
+  };
+  const auto newline = std::find(bytes.begin(), bytes.begin() + std::min<std::size_t>(bytes.size(), 128), '\n');
+  if (newline == bytes.end() || newline == bytes.begin() + std::min<std::size_t>(bytes.size(), 128))
+    return fail("header", std::string("no '") + kProbeMagic + " <face_size> <exposure>' line");
+  const std::string header(bytes.begin(), newline);
+  const std::string magic = kProbeMagic;
+  if (header.rfind(magic + " ", 0) != 0) return fail("header", "not a probelight probe file");
+  std::istringstream fields(header.substr(magic.size()));
+  StoredProbe probe;
+  std::string extra;
+  if (!(fields >> probe.face_size) || probe.face_size < 1 || probe.face_size > kMaxStoredProbeFaceSize)
+    return fail("face_size", "not a whole number in [1, " + std::to_string(kMaxStoredProbeFaceSize) + "]");
+  if (!(fields >> probe.exposure_product) || !std::isfinite(probe.exposure_product) ||
+      !(probe.exposure_product == 0.0 ||
+        (probe.exposure_product >= kMinStoredExposure && probe.exposure_product <= kMaxStoredExposure)))
+    return fail("exposure", "not 0 (unknown) or a number in [1e-3, 1e9]");
+  if (fields >> extra) return fail("header", "more than face_size and exposure");
+  const std::size_t texel_bytes = static_cast<std::size_t>(bytes.end() - (newline + 1));
+  const std::size_t count = probeTexelCount(probe.face_size);
+  if (texel_bytes != count * sizeof(glm::vec4))
+    return fail("texels", std::to_string(texel_bytes) + " bytes, a cube of face size " +
+                              std::to_string(probe.face_size) + " has " + std::to_string(count * sizeof(glm::vec4)));
+  probe.texels.resize(count);
+  std::memcpy(probe.texels.data(), &*(newline + 1), texel_bytes);
+  for (std::size_t i = 0; i < count; ++i) {
+    const glm::vec4& t = probe.texels[i];
+    // Radiance as the lighting's bound. The confidence is 1/sigma^2 of a
+    // direction, sigma at least a texel's angle / sqrt(12), summed over at
+    // most memory_views (30): 1e8 rad^-2 at face size 1024, so 1e9 is
+    // beyond any this program writes, and a larger one would freeze the
+    // texel against every later view.
+    const bool radiance_good = std::isfinite(t.r) && std::isfinite(t.g) && std::isfinite(t.b) && t.r >= 0.0f &&
+                               t.g >= 0.0f && t.b >= 0.0f && t.r <= kMaxStoredRadiance &&
+                               t.g <= kMaxStoredRadiance && t.b <= kMaxStoredRadiance;
+    if (!radiance_good)
+      return fail("texels[" + std::to_string(i) + "]",
+                  "radiance negative, above " + std::to_string(static_cast<long>(kMaxStoredRadiance)) + " or not finite");
+    if (!(std::abs(t.a) <= kMaxStoredProbeConfidence))
+      return fail("texels[" + std::to_string(i) + "]", "confidence beyond 1e9 or not finite");
+  }
+  return probe;
 }
 
 }  // namespace probelight

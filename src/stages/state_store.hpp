@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include "ibl/light_dome.hpp"
 #include "ibl/white_reference.hpp"
 
@@ -56,5 +58,26 @@ bool saveLighting(const std::filesystem::path& state_dir, const StoredLighting& 
 // one-line error naming the file and what is wrong when it is unreadable
 // (the kiosk then starts as if there were none, and says so).
 std::optional<StoredLighting> loadLighting(const std::filesystem::path& state_dir, std::string& error);
+
+// The probe merged over views (stages/probe_merge.hpp), kept with the
+// lighting: <dir>/probe.bin. A text header line,
+//   probelight probe 1 <face_size> <exposure time x gain, 0: unknown>
+// then the texels (rgb radiance, signed confidence), 4 little-endian
+// float32 each, face-major: 384 KiB for 64^2 faces. Binary because the
+// confidence and the radiance above the 8-bit range are not an image's.
+struct StoredProbe {
+  int face_size = 0;
+  double exposure_product = 0.0;
+  std::vector<glm::vec4> texels;
+};
+inline constexpr int kMaxStoredProbeFaceSize = 1024;
+inline constexpr float kMaxStoredProbeConfidence = 1e9f;
+std::filesystem::path probeStatePath(const std::filesystem::path& state_dir);
+bool saveProbe(const std::filesystem::path& state_dir, const StoredProbe& probe, std::string& error);
+// As loadLighting: nullopt with an empty error when there is no file,
+// nullopt with one line naming the file and the field when it is not a
+// probe this program wrote (header, face_size, exposure, texels: their
+// count, or a negative or non-finite value).
+std::optional<StoredProbe> loadProbe(const std::filesystem::path& state_dir, std::string& error);
 
 }  // namespace probelight

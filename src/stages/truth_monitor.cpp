@@ -1,5 +1,6 @@
 #include "stages/truth_monitor.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -12,7 +13,7 @@ namespace probelight {
 TruthMonitor::TruthMonitor(std::shared_ptr<const sim::World> world, RunReport& report)
     : world_(std::move(world)), report_(report) {}
 
-void TruthMonitor::observe(const FrameContext& ctx, const MapsStage& maps) {
+void TruthMonitor::observe(const FrameContext& ctx, const MapsStage& maps, const ibl::SceneLighting& lighting) {
   if (!ctx.frame.metadata.truth) return;
   const FrameTruth& truth = *ctx.frame.metadata.truth;
   if (truth.probe_radius_px > 0.0) {
@@ -26,9 +27,10 @@ void TruthMonitor::observe(const FrameContext& ctx, const MapsStage& maps) {
   // Whatever the maps hold now, updated this frame or kept, against the
   // truth now: a map kept too long (a lamp switched on) shows here.
   if (world_ && maps.haveMaps() && maps.mapsView() && ctx.number % kCheckEveryFrames == 0) {
-    const double diffuse_error = measureMaps(ctx.frame.metadata.sequence, *maps.mapsView(), maps.maps());
+    const MapErrors errors = measureMaps(ctx.frame.metadata.sequence, *maps.mapsView(), maps.maps(), lighting);
     truth_checks_.push_back({{"frame", ctx.number},
-                             {"diffuse_irradiance_rel_error_vs_clipped", finiteOrNull(diffuse_error)},
+                             {"diffuse_irradiance_rel_error_vs_clipped", finiteOrNull(errors.diffuse_vs_clipped)},
+                             {"lit_irradiance_rel_error_vs_hdr", finiteOrNull(errors.lit_vs_hdr)},
                              {"frames_since_map_update", maps.framesSinceUpdate()}});
   }
 }
@@ -58,8 +60,9 @@ void TruthMonitor::measureTracking(const FrameTruth& truth, const FrameContext& 
 
 // The GPU's maps against the simulator's radiance and irradiance, for the
 // view the maps were made from.
-double TruthMonitor::measureMaps(std::uint64_t frame_index, const ibl::MirrorBallView& view,
-                                 const passes::EnvironmentMaps& maps) {
+TruthMonitor::MapErrors TruthMonitor::measureMaps(std::uint64_t frame_index, const ibl::MirrorBallView& view,
+                                                  const passes::EnvironmentMaps& maps,
+                                                  const ibl::SceneLighting& lighting) {
   using ibl::luminance;
   // Reflection map, over the directions the ball shows well: within 100
   // degrees of the direction back toward the camera (beyond that the view is
@@ -70,7 +73,7 @@ double TruthMonitor::measureMaps(std::uint64_t frame_index, const ibl::MirrorBal
   std::string error;
   const std::optional<ibl::CubeMapRGB> reflection_read = maps.readReflection(error);
   const std::optional<ibl::CubeMapRGB> diffuse_read = maps.readDiffuse(error);
-  if (!reflection_read || !diffuse_read) return std::nan("");
+  if (!reflection_read || !diffuse_read) return {};
   const ibl::CubeMapRGB& reflection = *reflection_read;
   const glm::dvec3 to_camera = glm::normalize(view.pose.cameraCenterWorld() - view.center_w);
   const double rim_cosine = std::cos(glm::radians(100.0));
@@ -93,8 +96,8 @@ double TruthMonitor::measureMaps(std::uint64_t frame_index, const ibl::MirrorBal
   // times it. Compared on the up normal and the four horizontal ones.
   const ibl::CubeMapRGB& diffuse = *diffuse_read;
   const glm::dvec3 normals[] = {{0, 0, 1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
-  double clipped_error_sum = 0.0;
-  int clipped_errors = 0;
+  double clipped_error_sum = 0.0, lit_error_sum = 0.0;
+  int clipped_errors = 0, lit_errors = 0;
   for (const glm::dvec3& normal : normals) {
     const sim::IrradianceTruth truth = world_->irradiance(normal, frame_index);
     const double estimated = std::numbers::pi * luminance(glm::dvec3(diffuse.sampleBilinear(normal)));
@@ -104,11 +107,25 @@ double TruthMonitor::measureMaps(std::uint64_t frame_index, const ibl::MirrorBal
       clipped_error_sum += relative;
       ++clipped_errors;
     }
-    if (luminance(truth.hdr) > 0.0)
+    if (luminance(truth.hdr) > 0.0) {
       report_.recordAccuracy("diffuse_irradiance_rel_error_vs_hdr",
                              std::abs(estimated - luminance(truth.hdr)) / luminance(truth.hdr));
+      // The shaders' sum: E / pi of the map plus each clipped light's
+      // clipped_diffuse_rgb * max(0, n . d).
+      glm::dvec3 lit = glm::dvec3(diffuse.sampleBilinear(normal));
+      for (std::size_t k = 0; k < lighting.clipped_direction_w.size(); ++k)
+        lit += glm::dvec3(lighting.clipped_diffuse_rgb[k]) *
+               std::max(0.0, glm::dot(normal, glm::dvec3(lighting.clipped_direction_w[k])));
+      const double relative = std::abs(std::numbers::pi * luminance(lit) - luminance(truth.hdr)) / luminance(truth.hdr);
+      report_.recordAccuracy("lit_irradiance_rel_error_vs_hdr", relative);
+      lit_error_sum += relative;
+      ++lit_errors;
+    }
   }
-  return clipped_errors > 0 ? clipped_error_sum / clipped_errors : std::nan("");
+  MapErrors errors;
+  if (clipped_errors > 0) errors.diffuse_vs_clipped = clipped_error_sum / clipped_errors;
+  if (lit_errors > 0) errors.lit_vs_hdr = lit_error_sum / lit_errors;
+  return errors;
 }
 
 void TruthMonitor::writeReport(nlohmann::json& report) const {

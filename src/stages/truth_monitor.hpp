@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "ibl/surface_shading.hpp"
 #include "sim/world.hpp"
 #include "stages/frame_context.hpp"
 #include "stages/maps_stage.hpp"
@@ -28,7 +29,9 @@ class TruthMonitor {
   TruthMonitor(std::shared_ptr<const sim::World> world, RunReport& report);
 
   // After the frame was shown (frames without a truth are ignored).
-  void observe(const FrameContext& ctx, const MapsStage& maps);
+  // `lighting`: what the object is lit with beside the maps (the clipped
+  // lights).
+  void observe(const FrameContext& ctx, const MapsStage& maps, const ibl::SceneLighting& lighting);
 
   // report.json: map_updates.measured.truth_center_shift_px and
   // map_updates.truth_checks (accuracy goes into the report's own section).
@@ -36,9 +39,17 @@ class TruthMonitor {
 
  private:
   void measureTracking(const FrameTruth& truth, const FrameContext& ctx);
-  // The mean relative error of the diffuse map against the 8-bit-visible
-  // irradiance (NaN when the maps could not be read).
-  double measureMaps(std::uint64_t frame_index, const ibl::MirrorBallView& view, const passes::EnvironmentMaps& maps);
+  struct MapErrors {
+    // The diffuse map against the 8-bit-visible irradiance.
+    double diffuse_vs_clipped = std::nan("");
+    // The diffuse map plus the clipped lights (what the object's diffuse
+    // term is lit with) against the whole irradiance.
+    double lit_vs_hdr = std::nan("");
+  };
+  // Mean relative errors over the up and the four horizontal normals (NaN
+  // when the maps could not be read).
+  MapErrors measureMaps(std::uint64_t frame_index, const ibl::MirrorBallView& view, const passes::EnvironmentMaps& maps,
+                        const ibl::SceneLighting& lighting);
 
   std::shared_ptr<const sim::World> world_;
   RunReport& report_;

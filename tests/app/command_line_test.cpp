@@ -175,7 +175,14 @@ TEST(CommandLine, EachFrameTakesTheBracketsAfterIt) {
   EXPECT_EQ(analyze.more_views[2].brackets[0].path, "d3.png");
   // More than 16 views is refused.
   std::vector<std::string> args = {"--camera", "c.yaml", "--rig", "r.yaml", "--out", "o"};
-  for (int i = 0; i < 17; ++i) args.insert(args.end(), {"--frame", "f" + std::to_string(i) + ".png"});
+  for (int i = 0; i < 17; ++i) {
+    // Appended in place: GCC 12's -Wrestrict misreads "f" + std::to_string(i).
+    std::string frame = std::to_string(i);
+    frame.insert(0, 1, 'f');
+    frame.append(".png");
+    args.push_back("--frame");
+    args.push_back(frame);
+  }
   try {
     parseAnalyzeOptions(args);
     ADD_FAILURE() << "17 views accepted";

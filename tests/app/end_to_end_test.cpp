@@ -302,6 +302,31 @@ TEST_F(EndToEnd, LightingIsKeptInTheStateDirectoryAcrossRuns) {
   EXPECT_TRUE(report["state"]["loaded"].get<bool>());
   EXPECT_NE(second.stderr_text.find("lighting from"), std::string::npos) << second.stderr_text;
 
+  // The probe over views is kept with the lighting, and read back.
+  EXPECT_EQ(report["counters"]["probe_saves"], 1);
+  EXPECT_TRUE(report["probe_merge"]["loaded"].get<bool>()) << report["probe_merge"].dump();
+  {
+    std::string error;
+    const auto probe = loadProbe(state, error);
+    ASSERT_TRUE(probe) << error;
+    EXPECT_EQ(probe->face_size, 64);
+    EXPECT_GT(probe->exposure_product, 0.0) << "the simulated camera says its exposure";
+  }
+
+  // A damaged probe: said once, the kiosk runs without it, and the run's
+  // own fit writes a good one.
+  {
+    std::ofstream(state / "probe.bin", std::ios::trunc) << "probelight probe 1 64 1000\nshort";
+    CommandResult bad_probe = run(flags + " --out " + (dir_ / "bad_probe").string());
+    ASSERT_EQ(bad_probe.exit_status, 0) << bad_probe.stderr_text;
+    EXPECT_EQ(testing::countOccurrences(bad_probe.stderr_text, "probe.bin: field 'texels'"), 1u) << bad_probe.stderr_text;
+    report = readReport(dir_ / "bad_probe");
+    EXPECT_FALSE(report["probe_merge"]["loaded"].get<bool>());
+    EXPECT_TRUE(report["state"]["loaded"].get<bool>()) << "the lighting beside it is still good";
+    std::string error;
+    EXPECT_TRUE(loadProbe(state, error)) << error;
+  }
+
   std::ofstream(state / "lighting.json") << "{ not json";
   CommandResult damaged = run(flags + " --out " + (dir_ / "damaged").string());
   ASSERT_EQ(damaged.exit_status, 0) << damaged.stderr_text;
@@ -346,7 +371,12 @@ TEST_F(EndToEnd, GlossyMapsAreMadeOnlyForAGlossyObject) {
   const nlohmann::json glossy = readReport(glossy_out);
   const nlohmann::json mirror = readReport(mirror_out);
   ASSERT_TRUE(glossy["stages"].contains("glossy"));
-  EXPECT_EQ(glossy["stages"]["glossy"]["runs"], glossy["stages"]["probe_to_cube"]["runs"]);
+  // With every map update, but where the probe over views moved no map
+  // (environment_maps.merge_views: "probe unchanged").
+  const nlohmann::json& glossy_stage = glossy["stages"]["glossy"];
+  EXPECT_EQ(glossy_stage["runs"].get<int>() + glossy_stage.value("skip_reasons", nlohmann::json::object()).value("probe unchanged", 0),
+            glossy["stages"]["probe_to_cube"]["runs"].get<int>())
+      << glossy_stage.dump();
   EXPECT_FALSE(mirror["stages"].contains("glossy"));
   expectAllNumbersFinite(glossy["accuracy"], "accuracy");
 }
@@ -745,6 +775,10 @@ TEST_F(EndToEnd, RecalibrationBracketsTheBallAndFindsTheSun) {
     ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
     const nlohmann::json report = readReport(out);
     EXPECT_EQ(report["counters"]["brackets_merged"], 1) << report["counters"].dump();
+    // The bracket went into the probe over views, and the fit read its
+    // measured highlights from there (clipped lights below come only from
+    // a fit with an HDR map).
+    EXPECT_EQ(report["probe_merge"]["brackets"], 1) << report["probe_merge"].dump();
     const nlohmann::json& hdr = report["hdr"];
     ASSERT_EQ(hdr["method"], "bracket") << hdr.dump(2);
     EXPECT_EQ(hdr["still_clipped_sr"].get<double>(), 0.0) << "the bracket goes on until the ball stops clipping";

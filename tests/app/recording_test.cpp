@@ -147,7 +147,9 @@ TEST_F(Recording, AnalyzeTakesARecordedFrameAndItsBracketByTheirMetadata) {
     EXPECT_NEAR(f["ev"].get<double>(), expected_ev[path], 1e-9);
     if (f["used"].get<bool>()) {
       ++used;
-      if (!f["measured_ev"].is_null()) EXPECT_NEAR(f["measured_ev"].get<double>(), f["ev"].get<double>(), 0.5);
+      if (!f["measured_ev"].is_null()) {
+        EXPECT_NEAR(f["measured_ev"].get<double>(), f["ev"].get<double>(), 0.5);
+      }
     }
   }
   EXPECT_GE(used, 2) << analysis["hdr"].dump(1);

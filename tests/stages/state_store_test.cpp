@@ -5,6 +5,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -181,6 +183,72 @@ TEST_F(StateStore, DeeplyNestedJsonIsRefusedNotACrash) {
                       << std::string(1000000, ']') << "}";
   EXPECT_FALSE(loadLighting(dir_ / "state", error));
   EXPECT_NE(error.find(path.string() + ": nested deeper than 16 levels"), std::string::npos) << error;
+}
+
+// The probe over views: saved and read back bit for bit; a missing file is
+// no error; every way a file can be wrong is one line naming the file and
+// the field, and nothing is returned.
+TEST_F(StateStore, TheProbeRoundTripsAndEveryDamageIsNamed) {
+  StoredProbe probe;
+  probe.face_size = 4;
+  probe.exposure_product = 8000.0 * 1.5;
+  for (std::size_t i = 0; i < 6u * 4u * 4u; ++i)
+    probe.texels.push_back({0.1f * i, 2.5f, 1e3f, i % 3 == 0 ? -7.0f : 1234.5f});
+  std::string error;
+  EXPECT_FALSE(loadProbe(dir_, error).has_value());
+  EXPECT_EQ(error, "") << "no file yet is first boot, not an error";
+  ASSERT_TRUE(saveProbe(dir_, probe, error)) << error;
+  const std::optional<StoredProbe> back = loadProbe(dir_, error);
+  ASSERT_TRUE(back.has_value()) << error;
+  EXPECT_EQ(back->face_size, 4);
+  EXPECT_EQ(back->exposure_product, probe.exposure_product);  // written with 17 digits
+  ASSERT_EQ(back->texels.size(), probe.texels.size());
+  for (std::size_t i = 0; i < probe.texels.size(); ++i) EXPECT_EQ(back->texels[i], probe.texels[i]) << i;
+
+  // A probe that is not a cube is not written.
+  StoredProbe torn = probe;
+  torn.texels.pop_back();
+  EXPECT_FALSE(saveProbe(dir_ / "other", torn, error));
+
+  const std::string good = read(probeStatePath(dir_));
+  const std::size_t header_end = good.find('\n') + 1;
+  const std::string texels = good.substr(header_end);
+  auto expectRefused = [&](const std::string& contents, const std::string& field) {
+    std::ofstream(probeStatePath(dir_), std::ios::binary | std::ios::trunc) << contents;
+    std::string why;
+    EXPECT_FALSE(loadProbe(dir_, why).has_value()) << field;
+    EXPECT_EQ(why.rfind(probeStatePath(dir_).string() + ": ", 0), 0u) << why;
+    EXPECT_NE(why.find("field '" + field + "'"), std::string::npos) << why;
+    EXPECT_EQ(why.find('\n'), std::string::npos) << why;
+  };
+  expectRefused("", "header");
+  expectRefused(std::string(300, 'x'), "header");
+  expectRefused("probelight lighting 1 4 12000\n" + texels, "header");
+  expectRefused("probelight probe 1 0 12000\n" + texels, "face_size");
+  expectRefused("probelight probe 1 2000 12000\n" + texels, "face_size");
+  expectRefused("probelight probe 1 four 12000\n" + texels, "face_size");
+  expectRefused("probelight probe 1 4 -5\n" + texels, "exposure");
+  expectRefused("probelight probe 1 4 nan\n" + texels, "exposure");
+  expectRefused("probelight probe 1 4 1e12\n" + texels, "exposure");
+  expectRefused("probelight probe 1 4 12000 7\n" + texels, "header");
+  expectRefused(good.substr(0, good.size() - 1), "texels");      // cut short
+  expectRefused(good + std::string(16, '\0'), "texels");         // one texel too many
+  expectRefused("probelight probe 1 3 12000\n" + texels, "texels");  // another face size's count
+  auto withTexel = [&](std::size_t index, const glm::vec4& value) {
+    std::string changed = good;
+    std::memcpy(changed.data() + header_end + index * sizeof(glm::vec4), &value, sizeof value);
+    return changed;
+  };
+  expectRefused(withTexel(5, {NAN, 0.0f, 0.0f, 1.0f}), "texels[5]");
+  expectRefused(withTexel(6, {-1.0f, 0.0f, 0.0f, 1.0f}), "texels[6]");
+  expectRefused(withTexel(7, {1.0f, INFINITY, 0.0f, 1.0f}), "texels[7]");
+  expectRefused(withTexel(8, {1.0f, 1.0f, 1.0f, 2e9f}), "texels[8]");
+  expectRefused(withTexel(9, {1.0f, 1.0f, 1.0f, NAN}), "texels[9]");
+  // Unknown exposure (0) is a valid file: a source that cannot say.
+  std::ofstream(probeStatePath(dir_), std::ios::binary | std::ios::trunc) << "probelight probe 1 4 0\n" << texels;
+  const std::optional<StoredProbe> unknown = loadProbe(dir_, error);
+  ASSERT_TRUE(unknown.has_value()) << error;
+  EXPECT_EQ(unknown->exposure_product, 0.0);
 }
 
 }  // namespace
