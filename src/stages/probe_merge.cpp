@@ -81,20 +81,8 @@ ProbeViewCounts ProbeMerge::addView(const ibl::MirrorBallView& view, const ibl::
   return counts;
 }
 
-// An 8-bit map's texel is a bilinear sample of the ball's pixels: where one
-// of them clipped, the texel's value is below the light's whatever it
-// reads (a sun a pixel wide beside sky averages to sky-like codes). Such a
-// texel is a lower bound: it must not overwrite, nor average down, what a
-// bracket measured there. A texel's sample reads the pixels within one
-// pixel of its point on the ball, so the texels whose points lie in the
-// 3 x 3 pixels around a clipped pixel are marked (their directions at the
-// square's corners, edges and centre), and their neighbours, for the
-// texels between those nine directions where the ball's rim spreads a
-// pixel over several texels. Only where the probe holds a bracket's
-// measurement above the sample: elsewhere a lower bound would be raised to
-// the largest of the views' samples, and the maps of a probe no bracket
-// has seen would hold more than an 8-bit camera can know beside a clipped
-// light (each view mixes it into other texels).
+// After each view: the texels a bracket measured (with how surely), and
+// those where a later 8-bit sample replaced its measurement.
 void ProbeMerge::trackBracketTexels(bool bracket) {
   const std::size_t per_face = static_cast<std::size_t>(accumulator_.faceSize()) * accumulator_.faceSize();
   for (std::size_t i = 0; i < bracket_confidence_.size(); ++i) {
@@ -137,6 +125,20 @@ bool ProbeMerge::measuredAboveClip(std::size_t texel) const {
   return kept.a > 0.0f && std::max({kept.r, kept.g, kept.b}) > static_cast<float>(clip_level_);
 }
 
+// An 8-bit map's texel is a bilinear sample of the ball's pixels: where one
+// of them clipped, the texel's value is below the light's whatever it
+// reads (a sun a pixel wide beside sky averages to sky-like codes). Such a
+// texel is a lower bound: it must not overwrite, nor average down, what a
+// bracket measured there. A texel's sample reads the pixels within one
+// pixel of its point on the ball, so the texels whose points lie in the
+// 3 x 3 pixels around a clipped pixel are marked (their directions at the
+// square's corners, edges and centre), and their neighbours, for the
+// texels between those nine directions where the ball's rim spreads a
+// pixel over several texels. Only where the probe holds a bracket's
+// measurement above the sample: elsewhere a lower bound would be raised to
+// the largest of the views' samples, and the maps of a probe no bracket
+// has seen would hold more than an 8-bit camera can know beside a clipped
+// light (each view mixes it into other texels).
 void ProbeMerge::markTexelsTouchingClippedPixels(const ibl::MirrorBallView& view, const FrameBuffer& frame,
                                                  double to_probe_exposure) {
   const int n = accumulator_.faceSize();
@@ -220,7 +222,6 @@ std::array<double, 6> ProbeMerge::axisIrradiance() const {
 bool ProbeMerge::restore(const std::vector<glm::vec4>& texels, double exposure_product, std::string& error) {
   if (!accumulator_.restore(texels, error)) return false;
   exposure_product_ = knownExposure(exposure_product) ? exposure_product : 0.0;
-  // Only a bracket measures above the clip.
   // Only a bracket measures above the clip (how sure it was is not kept:
   // as sure as any view).
   for (std::size_t i = 0; i < bracket_confidence_.size(); ++i)

@@ -44,10 +44,12 @@ class ProbeMerge {
 
   // One view into the probe. `map` its reflection map and `validity` the
   // map's alpha (null: the texels the view's ball shows), `still_clipped` a
-  // bracket's flags (null: a texel is a lower bound where a channel reaches
-  // the clip level, or, with `frame`, where a ball pixel it samples clipped), `to_probe_exposure` what turns the view's units into the
-  // probe's (the probe's exposure / the view's). With `frame`, the pixels
-  // around the ball fill what it hides.
+  // bracket's flags (given: the view is a bracket's; null: an 8-bit view,
+  // whose texel is a lower bound where a channel reaches the clip level,
+  // and, below a bracket's measurement, where it read beside a clipped
+  // pixel of `frame` or near the rim), `to_probe_exposure` what turns the
+  // view's units into the probe's (the probe's exposure / the view's).
+  // With `frame`, the pixels around the ball fill what it hides.
   ProbeViewCounts addView(const ibl::MirrorBallView& view, const ibl::CubeMapRGB& map, const std::vector<float>* validity,
                           const std::vector<std::uint8_t>* still_clipped, double to_probe_exposure,
                           const FrameBuffer* frame);
