@@ -228,6 +228,9 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.pixel_format = sim.readString("pixel_format", settings.sim.pixel_format, sim_formats);
   settings.sim.camera_lost_at_frame =
       sim.readInt("camera_lost_at_frame", settings.sim.camera_lost_at_frame, Range::atLeast(-1));
+  settings.sim.camera_silent_at_frame =
+      sim.readInt("camera_silent_at_frame", settings.sim.camera_silent_at_frame, Range::atLeast(-1));
+  settings.sim.camera_silent_s = sim.readDouble("camera_silent_s", settings.sim.camera_silent_s, Range::closed(0.0, 60.0));
   settings.sim.camera_lost_restarts =
       sim.readInt("camera_lost_restarts", settings.sim.camera_lost_restarts, Range::closed(0, 1000));
   settings.sim.min_exposure_us =

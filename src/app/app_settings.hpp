@@ -38,6 +38,8 @@ struct SimConfig {
   // The camera disappearing mid-run (for testing the reconnect): frame N
   // fails, then the first `camera_lost_restarts` reconnects fail too.
   int camera_lost_at_frame = -1;  // -1: never
+  int camera_silent_at_frame = -1;  // -1: never
+  double camera_silent_s = 5.0;
   int camera_lost_restarts = 2;
   // The shortest exposure the simulated sensor can take (microseconds; 0: any),
   // as real sensors have one: a bracket asking for less gets this.

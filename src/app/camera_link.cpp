@@ -91,6 +91,10 @@ bool CameraLink::tryReconnect(std::string& status) {
   return false;
 }
 
+int CameraLink::silentSeconds() const {
+  return static_cast<int>(consecutive_timeouts_ * std::chrono::duration_cast<std::chrono::seconds>(kFrameWait).count());
+}
+
 std::chrono::milliseconds CameraLink::idleWait() const {
   const double wait_s = std::max(0.0, backoff_.nextAttemptS() - monotonicNowS());
   return std::chrono::milliseconds(static_cast<int>(1000.0 * std::min(0.2, wait_s)) + 1);

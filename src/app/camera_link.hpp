@@ -41,6 +41,9 @@ class CameraLink {
   // How long the loop may sleep before the next attempt (a few redraws a
   // second are plenty for a still picture).
   std::chrono::milliseconds idleWait() const;
+  // While the camera is silent (next() said kNoFrame): for how long, in
+  // whole waits (0 once a frame came).
+  int silentSeconds() const;
   // Frames since the camera (re)started, the last one included.
   std::uint64_t framesSinceStart() const { return frames_since_start_; }
 

@@ -121,6 +121,7 @@ class Kiosk {
       // The report is still written (the caller does), with what ran.
       if (event == CameraEvent::kFailed) return Status::badInput(source_->name() + ": " + source_->lastError());
       if (event == CameraEvent::kLost) lights_->onCameraLost();
+      if (event == CameraEvent::kNoFrame) PROBELIGHT_TRY(whileCameraSilent());
       if (event != CameraEvent::kFrame) continue;
       recordFrame(*lease);
       FrameContext ctx(*lease, frames_done_++);
@@ -242,6 +243,20 @@ class Kiosk {
     else
       notifier_.frameShown();  // nothing to show yet; the service itself is alive
     std::this_thread::sleep_for(camera_->idleWait());
+    return Status::ok();
+  }
+
+  // The camera is open but delivers nothing (a stalled sensor, a driver
+  // gone without a word): the last frame stays, saying so, and the
+  // watchdog is fed, since the service itself is alive. The camera link
+  // re-opens the camera after a long silence (camera_link.hpp); before
+  // that, the watchdog must not restart the whole service for it (the
+  // shipped unit's WatchdogSec is as long as that silence).
+  Status whileCameraSilent() {
+    const std::string status =
+        "No frame from the camera for " + std::to_string(camera_->silentSeconds()) + " s: waiting";
+    if (!upload_->texture().empty()) return show(last_track_, status, last_frame_number_, false);
+    notifier_.frameShown();
     return Status::ok();
   }
 
@@ -385,6 +400,8 @@ class Kiosk {
       if (settings.sim.pixel_format == format.config_name) camera_options.layout = format.layout;
     camera_options.lost_at_frame = settings.sim.camera_lost_at_frame;
     camera_options.failed_restarts = settings.sim.camera_lost_restarts;
+    camera_options.silent_at_frame = settings.sim.camera_silent_at_frame;
+    camera_options.silent_s = settings.sim.camera_silent_s;
     camera_options.min_exposure_us = settings.sim.min_exposure_us;
     camera_options.min_exposure_reported = settings.sim.min_exposure_reported;
     camera_options.exposure_controllable = settings.sim.exposure_control;

@@ -223,6 +223,11 @@ void ThreadedFrameSource::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+bool ThreadedFrameSource::pauseUnlessStopped(std::chrono::milliseconds duration) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  return !changed_.wait_for(lock, duration, [&] { return stopping_; });
+}
+
 void ThreadedFrameSource::run() {
   // The numbering carries on across restarts: a reconnected camera's frames
   // follow the old ones (the simulated world's clock does not rewind).

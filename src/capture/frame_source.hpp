@@ -210,6 +210,10 @@ class ThreadedFrameSource : public FrameSource {
   // Called on the consumer's thread as waitFrame hands `frame` out (sources
   // with exposure control move their schedule on: ExposureSchedule).
   virtual void handedOut(const FrameBuffer& frame) { (void)frame; }
+  // For produce(): waits `duration`, or less when the source is stopped
+  // meanwhile (then false), so that a camera stalled on purpose can still
+  // be stopped and re-opened.
+  bool pauseUnlessStopped(std::chrono::milliseconds duration);
 
  private:
   void run();

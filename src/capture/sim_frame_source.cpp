@@ -110,6 +110,12 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
     error = "camera: sim camera disconnected";
     return Produced::kError;
   }
+  if (options_.silent_at_frame >= 0 && index == static_cast<std::uint64_t>(options_.silent_at_frame) &&
+      !was_silent_) {
+    was_silent_ = true;
+    const auto silence = std::chrono::milliseconds(static_cast<long long>(1000.0 * options_.silent_s));
+    if (!pauseUnlessStopped(silence)) return Produced::kEndOfStream;  // stopped while silent
+  }
   // The sensor's own exposure: 10 ms at gain 1 (the scene's exposure),
   // shifted by exposure_stops.
   constexpr double kSimExposureUs = 10000.0;

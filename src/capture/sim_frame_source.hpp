@@ -29,6 +29,10 @@ struct SimCameraOptions {
   // then the next `failed_restarts` start() calls fail; the one after
   // succeeds and frames go on from where they stopped. -1: never.
   std::int64_t lost_at_frame = -1;
+  // A camera that goes silent: frame `silent_at_frame` comes `silent_s`
+  // seconds late (once), the stream open all along. -1: never.
+  std::int64_t silent_at_frame = -1;
+  double silent_s = 0.0;
   // The sensor's shortest exposure (microseconds; 0: any): a manual
   // exposure below it is taken at it, and the metadata says so.
   double min_exposure_us = 0.0;
@@ -81,6 +85,7 @@ class SimFrameSource : public ThreadedFrameSource {
   std::uint64_t frame_count_;
   SimCameraOptions options_;
   bool lost_ = false;       // the camera has gone (frame lost_at_frame failed)
+  bool was_silent_ = false;  // frame silent_at_frame was held back
   bool came_back_ = false;  // ... and a restart brought it back
   int restarts_failed_ = 0;
   ImageRGB8 rendered_;      // YUV layouts: the picture before encoding

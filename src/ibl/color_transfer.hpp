@@ -2,6 +2,8 @@
 // lighting maths happens in linear light.
 #pragma once
 
+#include <cstdint>
+
 #include <glm/glm.hpp>
 
 namespace probelight::ibl {
@@ -19,6 +21,15 @@ inline double luminance(const glm::dvec3& rgb) { return luminanceWeighted(rgb.r,
 // IEC 61966-2-1 piecewise sRGB curve, values in [0, 1].
 double srgbToLinear(double encoded);
 double linearToSrgb(double linear);
+
+// 8-bit sRGB codes without a pow per value (an 8-bit cube map's 24576
+// texels x 3 channels each way): srgbCodeToLinear(code) is
+// srgbToLinear(code / 255.0), from a table; linearToSrgbCode(linear) is
+// lround(255 * linearToSrgb(linear)), from the linear level at which each
+// code begins, found once by bisecting that very expression (so the two
+// agree exactly, boundaries included).
+double srgbCodeToLinear(std::uint8_t code);
+std::uint8_t linearToSrgbCode(double linear);
 
 // How the camera encodes light in its 8-bit values (its "transfer"). sRGB is
 // what libcamera's YUV and most webcams deliver; a camera tuned to a plain

@@ -119,14 +119,19 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
   const double k = settings_.change_sigmas;
   AccumulateCounts counts;
 
-  auto sample = [&](std::size_t i) -> const glm::vec3& {
-    return view.radiance.faces[i / per_face][i % per_face];
+  // The full sweeps walk the faces in order (i = face * per_face + local)
+  // rather than dividing each index by per_face.
+  auto forEachSample = [&](auto&& fn) {
+    std::size_t i = 0;
+    for (const std::vector<glm::vec3>& face : view.radiance.faces)
+      for (const glm::vec3& value : face) fn(i++, value);
   };
   // Per texel of the view: its luminance, NaN where the view did not see it.
   std::vector<float>& view_lum = view_luminance_;
   view_lum.resize(texels_.size());
-  for (std::size_t i = 0; i < texels_.size(); ++i)
-    view_lum[i] = view.confidence[i] > 0.0f && finite(sample(i)) ? static_cast<float>(lum(sample(i))) : NAN;
+  forEachSample([&](std::size_t i, const glm::vec3& value) {
+    view_lum[i] = view.confidence[i] > 0.0f && finite(value) ? static_cast<float>(lum(value)) : NAN;
+  });
   auto seenByView = [&](std::size_t i) { return !std::isnan(view_lum[i]); };
   // Texels each way the view's direction uncertainty spans (may exceed
   // max_search_texels: such a sample cannot seed a change).
@@ -218,11 +223,11 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
   }
 
   // Pass 2: the update.
-  for (std::size_t i = 0; i < texels_.size(); ++i) {
-    if (!seenByView(i)) continue;
+  forEachSample([&](std::size_t i, const glm::vec3& value) {
+    if (!seenByView(i)) return;
     ++counts.seen;
     glm::vec4& kept = texels_[i];
-    const glm::vec3 x = glm::max(sample(i), glm::vec3(0.0f));
+    const glm::vec3 x = glm::max(value, glm::vec3(0.0f));
     const float c = view.confidence[i];
     const bool x_bound = view.lower_bound[i] != 0;
     const double before = lum(glm::vec3(kept));
@@ -231,7 +236,7 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
       kept = glm::vec4(x, signed_c);
       ++seen_texels_;
       ++counts.first;
-      continue;  // a texel seen for the first time is not a move of the maps' light: counted apart
+      return;  // a texel seen for the first time is not a move of the maps' light: counted apart
     }
     const bool kept_bound = kept.a < 0.0f;
     const float kept_c = std::abs(kept.a);
@@ -265,7 +270,7 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
       const double sigma = std::max(noise_.sigma(std::max(before, after)), 1e-12);
       counts.largest_move_sigmas = std::max(counts.largest_move_sigmas, move / sigma);
     }
-  }
+  });
   return counts;
 }
 

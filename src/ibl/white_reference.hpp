@@ -149,7 +149,9 @@ struct ClippedLight {
 };
 
 // The share of `light`'s energy whose texels still clip (largest channel
-// >= clip_level) in `live`, a later 8-bit map of the same size: 1 while the
+// at clip_level, to within a half float's rounding: maps clamped at the
+// clip level hold it as a float, a half float or an 8-bit code, each
+// rounded its own way) in `live`, a later 8-bit map of the same size: 1 while the
 // sun or lamp is still there, 0 once it has gone (a cloud, a switch). The
 // frame-rate maps stay 8-bit; this is how they keep carrying the clipped
 // energy the last calibration measured, and drop it when it leaves.

@@ -82,8 +82,7 @@ bool EnvironmentMaps::setReflection(const ibl::CubeMapRGB& reflection, std::stri
       std::vector<std::uint8_t> bytes(texel_count * 4u);
       for (size_t i = 0; i < texel_count; ++i) {
         for (int c = 0; c < 3; ++c) {
-          const double encoded = ibl::linearToSrgb(static_cast<double>(texels[i][c]) / scale);
-          bytes[4 * i + static_cast<size_t>(c)] = static_cast<std::uint8_t>(std::lround(encoded * 255.0));
+          bytes[4 * i + static_cast<size_t>(c)] = ibl::linearToSrgbCode(static_cast<double>(texels[i][c]) / scale);
         }
         bytes[4 * i + 3] = static_cast<std::uint8_t>(std::lround(alpha(face, i) * 255.0f));
       }
@@ -122,7 +121,7 @@ std::optional<ibl::CubeMapRGB> EnvironmentMaps::readCube(const GpuCubeMap& map, 
       for (size_t i = 0; i < texel_count; ++i) {
         for (int c = 0; c < 3; ++c) {
           rgba[4 * i + static_cast<size_t>(c)] = static_cast<float>(
-              ibl::srgbToLinear(bytes[4 * i + static_cast<size_t>(c)] / 255.0) * map.linear_scale);
+              ibl::srgbCodeToLinear(bytes[4 * i + static_cast<size_t>(c)]) * map.linear_scale);
         }
         rgba[4 * i + 3] = bytes[4 * i + 3] / 255.0f;
       }

@@ -151,21 +151,36 @@ void ProbeMerge::markTexelsTouchingClippedPixels(const ibl::MirrorBallView& view
   const int x1 = std::min(frame.width_px - 1, static_cast<int>(std::ceil(outline.max_px.x)));
   const int y0 = std::max(0, static_cast<int>(std::floor(outline.min_px.y)));
   const int y1 = std::min(frame.height_px - 1, static_cast<int>(std::ceil(outline.max_px.y)));
-  bool any = false;
+  if (x1 < x0 || y1 < y0) return;
+  // The pixels within one of a clipped pixel (the outline's box grown by
+  // one), each solved for its direction once: a sun's pixels share most of
+  // their neighbours.
+  const int width = x1 - x0 + 3, height = y1 - y0 + 3;
+  std::vector<std::uint8_t>& near_clipped = near_clipped_pixels_;
+  near_clipped.assign(static_cast<std::size_t>(width) * height, 0);
+  bool any_clipped = false;
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {
       const glm::u8vec3 code = frame.rgbAt(x, y);
       if (std::max({code.r, code.g, code.b}) < clip_code_) continue;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const std::optional<glm::dvec3> direction = ibl::pixelToReflectedDirection(view, glm::dvec2(x + dx, y + dy));
-          if (!direction) continue;
-          const ibl::CubeTexelCoord coord = ibl::directionToCubeCoord(*direction);
-          const int tx = std::clamp(static_cast<int>(coord.s * n), 0, n - 1);
-          const int ty = std::clamp(static_cast<int>(coord.t * n), 0, n - 1);
-          touched[static_cast<std::size_t>(coord.face) * per_face + static_cast<std::size_t>(ty) * n + tx] = 1;
-          any = true;
-        }
+      any_clipped = true;
+      for (int dy = 0; dy <= 2; ++dy)
+        for (int dx = 0; dx <= 2; ++dx)
+          near_clipped[static_cast<std::size_t>(y - y0 + dy) * width + (x - x0 + dx)] = 1;
+    }
+  if (!any_clipped) return;
+  bool any = false;
+  for (int row = 0; row < height; ++row)
+    for (int column = 0; column < width; ++column) {
+      if (!near_clipped[static_cast<std::size_t>(row) * width + column]) continue;
+      const glm::dvec2 pixel(x0 - 1 + column, y0 - 1 + row);
+      const std::optional<glm::dvec3> direction = ibl::pixelToReflectedDirection(view, pixel);
+      if (!direction) continue;
+      const ibl::CubeTexelCoord coord = ibl::directionToCubeCoord(*direction);
+      const int tx = std::clamp(static_cast<int>(coord.s * n), 0, n - 1);
+      const int ty = std::clamp(static_cast<int>(coord.t * n), 0, n - 1);
+      touched[static_cast<std::size_t>(coord.face) * per_face + static_cast<std::size_t>(ty) * n + tx] = 1;
+      any = true;
     }
   if (!any) return;
   for (int face = 0; face < ibl::kCubeFaceCount; ++face)

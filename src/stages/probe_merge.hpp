@@ -103,6 +103,7 @@ class ProbeMerge {
   ibl::ProbeAccumulator accumulator_;
   ibl::ProbeObservation observation_;  // kept from view to view
   std::vector<std::uint8_t> touched_by_clipped_;  // ... and the texels a clipped pixel reaches
+  std::vector<std::uint8_t> near_clipped_pixels_;  // ... from these pixels
   // How sure the bracket whose measurement a texel holds was of its
   // direction (0: the texel holds no bracket's measurement).
   std::vector<float> bracket_confidence_;

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <cstdlib>
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "binary_test_support.hpp"
 
@@ -89,53 +91,85 @@ TEST_F(ServiceUnit, HardeningScoreIsTwoOrLess) {
   EXPECT_LE(score, 2.0) << output;
 }
 
-// A datagram socket standing in for systemd's: the kiosk, run with
-// NOTIFY_SOCKET and WATCHDOG_USEC pointing at it, must say READY=1 once,
-// ping the watchdog, and say STOPPING=1 at the end.
-TEST_F(ServiceUnit, KioskNotifiesReadyWatchdogAndStopping) {
-  const fs::path socket_path = dir_ / "notify.sock";
-  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  ASSERT_GE(fd, 0);
-  sockaddr_un address{};
-  address.sun_family = AF_UNIX;
-  ASSERT_LT(socket_path.string().size(), sizeof(address.sun_path));
-  std::strncpy(address.sun_path, socket_path.c_str(), sizeof(address.sun_path) - 1);
-  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)), 0);
-  // Drained while the kiosk runs, as systemd does: an AF_UNIX datagram
-  // socket queues only a few messages, and then the sender blocks.
-  std::vector<std::string> messages;
-  std::atomic<bool> done{false};
-  std::thread reader([&] {
-    char buffer[4096];
-    while (!done) {
-      pollfd poll_fd{fd, POLLIN, 0};
-      if (::poll(&poll_fd, 1, 20) <= 0) continue;
-      const ssize_t n = ::recv(fd, buffer, sizeof buffer, MSG_DONTWAIT);
-      if (n > 0) messages.emplace_back(buffer, static_cast<std::size_t>(n));
+// A datagram socket standing in for systemd's notify socket, drained while
+// the kiosk runs (as systemd does: an AF_UNIX datagram socket queues only a
+// few messages, and then the sender blocks). Each message with the time it
+// came, and NOTIFY_SOCKET / WATCHDOG_USEC set for the commands run meanwhile.
+class NotifyListener {
+ public:
+  struct Message {
+    std::string text;
+    double at_s;  // since the listener started
+  };
+
+  NotifyListener(const fs::path& socket_path, long long watchdog_usec) : start_(std::chrono::steady_clock::now()) {
+    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::strncpy(address.sun_path, socket_path.c_str(), sizeof(address.sun_path) - 1);
+    bound_ = fd_ >= 0 && socket_path.string().size() < sizeof(address.sun_path) &&
+             ::bind(fd_, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0;
+    reader_ = std::thread([this] {
+      while (!done_) {
+        pollfd poll_fd{fd_, POLLIN, 0};
+        if (::poll(&poll_fd, 1, 20) > 0) drain();
+      }
+      drain();
+    });
+    ::setenv("NOTIFY_SOCKET", socket_path.c_str(), 1);
+    ::setenv("WATCHDOG_USEC", std::to_string(watchdog_usec).c_str(), 1);
+  }
+  ~NotifyListener() { finish(); }
+
+  bool bound() const { return bound_; }
+  // Stops listening; the messages are complete after this.
+  const std::vector<Message>& finish() {
+    if (reader_.joinable()) {
+      ::unsetenv("NOTIFY_SOCKET");
+      ::unsetenv("WATCHDOG_USEC");
+      done_ = true;
+      reader_.join();
+      if (fd_ >= 0) ::close(fd_);
     }
-    for (ssize_t n; (n = ::recv(fd, buffer, sizeof buffer, MSG_DONTWAIT)) > 0;)
-      messages.emplace_back(buffer, static_cast<std::size_t>(n));
-  });
-  ::setenv("NOTIFY_SOCKET", socket_path.c_str(), 1);
-  ::setenv("WATCHDOG_USEC", "100000", 1);  // 100 ms: pings at least every 50 ms
+    return messages_;
+  }
+
+ private:
+  void drain() {
+    char buffer[4096];
+    for (ssize_t n; fd_ >= 0 && (n = ::recv(fd_, buffer, sizeof buffer, MSG_DONTWAIT)) > 0;)
+      messages_.push_back({std::string(buffer, static_cast<std::size_t>(n)),
+                           std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count()});
+  }
+
+  std::chrono::steady_clock::time_point start_;
+  int fd_ = -1;
+  bool bound_ = false;
+  std::atomic<bool> done_{false};
+  std::vector<Message> messages_;
+  std::thread reader_;
+};
+
+// The kiosk, run with NOTIFY_SOCKET and WATCHDOG_USEC pointing at a
+// listener, must say READY=1 once, ping the watchdog, and say STOPPING=1 at
+// the end.
+TEST_F(ServiceUnit, KioskNotifiesReadyWatchdogAndStopping) {
+  NotifyListener listener(dir_ / "notify.sock", 100000);  // 100 ms: pings at least every 50 ms
+  ASSERT_TRUE(listener.bound());
   const testing::CommandResult result = run("run --frames 20 --save-every 0 --quiet --out " + (dir_ / "out").string());
-  ::unsetenv("NOTIFY_SOCKET");
-  ::unsetenv("WATCHDOG_USEC");
-  done = true;
-  reader.join();
-  ::close(fd);
+  const std::vector<NotifyListener::Message>& messages = listener.finish();
   ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
   int ready = 0, watchdog = 0, stopping = 0, first_ready = -1, first_watchdog = -1;
   for (std::size_t i = 0; i < messages.size(); ++i) {
-    if (messages[i].find("READY=1") != std::string::npos) {
+    if (messages[i].text.find("READY=1") != std::string::npos) {
       ++ready;
       if (first_ready < 0) first_ready = static_cast<int>(i);
     }
-    if (messages[i].find("WATCHDOG=1") != std::string::npos) {
+    if (messages[i].text.find("WATCHDOG=1") != std::string::npos) {
       ++watchdog;
       if (first_watchdog < 0) first_watchdog = static_cast<int>(i);
     }
-    if (messages[i].find("STOPPING=1") != std::string::npos) ++stopping;
+    if (messages[i].text.find("STOPPING=1") != std::string::npos) ++stopping;
   }
   EXPECT_EQ(ready, 1);
   // 20 frames take well over 50 ms on any machine.
@@ -143,7 +177,39 @@ TEST_F(ServiceUnit, KioskNotifiesReadyWatchdogAndStopping) {
   EXPECT_LT(first_ready, first_watchdog) << "ready comes with the first frame shown, before any ping";
   EXPECT_EQ(stopping, 1);
   ASSERT_FALSE(messages.empty());
-  EXPECT_NE(messages.back().find("STOPPING=1"), std::string::npos);
+  EXPECT_NE(messages.back().text.find("STOPPING=1"), std::string::npos);
+}
+
+// A camera that stays open but delivers nothing for 8 s (less than the 10 s
+// after which the kiosk re-opens it): the service is alive, so the watchdog
+// keeps being fed through the silence (every gap between pings under the
+// 5 s limit; without the pings the gap would be the whole 8 s), the screen
+// says why the picture is still, and the run goes on with no loss.
+TEST_F(ServiceUnit, ASilentCameraKeepsTheWatchdogFedAndSaysSo) {
+  const fs::path config = dir_ / "silent.yaml";
+  std::ofstream(config) << "%YAML:1.0\n---\noutput:\n  save_every: 0\nsim:\n  camera_silent_at_frame: 6\n"
+                           "  camera_silent_s: 8\n";
+  NotifyListener listener(dir_ / "notify.sock", 5000000);
+  ASSERT_TRUE(listener.bound());
+  const testing::CommandResult result =
+      run("run --source sim --display headless --frames 12 --config " + config.string() + " --out " +
+          (dir_ / "silent").string());
+  const std::vector<NotifyListener::Message>& messages = listener.finish();
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  EXPECT_NE(result.stderr_text.find("no frame from sim:"), std::string::npos) << result.stderr_text;
+  std::vector<double> pings;
+  bool said_why = false;
+  for (const NotifyListener::Message& message : messages) {
+    if (message.text.find("WATCHDOG=1") != std::string::npos) pings.push_back(message.at_s);
+    if (message.text.find("STATUS=No frame from the camera for ") != std::string::npos) said_why = true;
+  }
+  EXPECT_TRUE(said_why) << "no status about the silent camera";
+  ASSERT_GE(pings.size(), 3u) << "an 8 s silence at a 2.5 s ping interval";
+  for (std::size_t i = 1; i < pings.size(); ++i)
+    EXPECT_LT(pings[i] - pings[i - 1], 5.0) << "watchdog gap between pings " << i - 1 << " and " << i;
+  const nlohmann::json report = readReport(dir_ / "silent");
+  EXPECT_EQ(report["frames"], 12);
+  EXPECT_EQ(report["camera"]["losses"], 0);
 }
 
 // Under systemd (JOURNAL_STREAM names stderr's device and inode) every line

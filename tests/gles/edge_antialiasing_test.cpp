@@ -163,7 +163,9 @@ TEST(EdgeAntialiasing, ProjectedBoundsHoldEveryPointOfTheBox) {
       // box's own image (a few pixels at this lens's strength). Only for a
       // box wholly in the frame: of one that leaves it, the sparse lattice
       // misses the part between its last point inside and the frame's edge.
-      if (inside_frame == 9 * 9 * 9) EXPECT_LE(rect.width, 1.05 * (high_x - low_x + 1) + 4) << trial;
+      if (inside_frame == 9 * 9 * 9) {
+        EXPECT_LE(rect.width, 1.05 * (high_x - low_x + 1) + 4) << trial;
+      }
     }
   }
   EXPECT_GT(cut, 150) << "the bounds must cut the layer, not give the whole frame";

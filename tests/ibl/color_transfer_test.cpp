@@ -68,3 +68,34 @@ TEST(CameraTransferDecode, EachCurveDecodesItsOwnEncoding) {
 
 }  // namespace
 }  // namespace probelight::ibl
+
+namespace probelight::ibl {
+namespace {
+
+// The table-driven 8-bit sRGB codes agree exactly with the pow-based
+// expressions they replace: every code's decode, and the encode of a dense
+// sweep of linear values plus each code's boundary and the doubles on
+// either side of it (where a rounding difference would show).
+TEST(SrgbCodes, TablesAgreeExactlyWithThePowExpressions) {
+  for (int code = 0; code < 256; ++code)
+    EXPECT_EQ(srgbCodeToLinear(static_cast<std::uint8_t>(code)), srgbToLinear(code / 255.0)) << code;
+  auto exact = [](double linear) { return static_cast<int>(std::lround(255.0 * linearToSrgb(linear))); };
+  for (int i = 0; i <= 200000; ++i) {
+    const double linear = i / 200000.0;
+    ASSERT_EQ(linearToSrgbCode(linear), exact(linear)) << linear;
+  }
+  for (int code = 1; code < 256; ++code) {
+    // The boundary: halfway between two codes in sRGB, back to linear.
+    const double boundary = srgbToLinear((code - 0.5) / 255.0);
+    double linear = std::nextafter(std::nextafter(boundary, 0.0), 0.0);
+    for (int step = 0; step < 5; ++step, linear = std::nextafter(linear, 2.0))
+      ASSERT_EQ(linearToSrgbCode(linear), exact(linear)) << "code " << code << " at " << linear;
+  }
+  // Outside [0, 1] as linearToSrgb clamps; NaN as black.
+  EXPECT_EQ(linearToSrgbCode(-1.0), 0);
+  EXPECT_EQ(linearToSrgbCode(7.0), 255);
+  EXPECT_EQ(linearToSrgbCode(std::nan("")), 0);
+}
+
+}  // namespace
+}  // namespace probelight::ibl

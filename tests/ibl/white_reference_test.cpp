@@ -309,5 +309,26 @@ TEST(WhiteReference, AClippedLightIsStillThereWhileItsTexelsClip) {
   EXPECT_EQ(stillClippedShare(lights[0], CubeMapRGB(4), 1.0), 0.0);
 }
 
+// A map clamped at a clip level holds it as its storage rounds it: 0.7 is
+// 0.69999999 as a float (below the double), and a half float rounds by up
+// to 1/2048 either way. Each still clips; a texel 1% below (about one 8-bit
+// code at the top) does not.
+TEST(WhiteReference, ATexelClampedAtTheClipLevelClipsInEveryStorage) {
+  const double clip_level = 0.7;
+  ASSERT_LT(static_cast<double>(static_cast<float>(clip_level)), clip_level) << "the case this test is for";
+  ClippedLight light;
+  light.texels = {0};
+  light.texel_share = {1.0f};
+  for (const double stored : {static_cast<double>(static_cast<float>(clip_level)), clip_level * (1.0 - 1.0 / 4096.0),
+                              clip_level * (1.0 + 1.0 / 4096.0)}) {
+    CubeMapRGB live(4);
+    live.faces[0][0] = glm::vec3(static_cast<float>(stored), 0.1f, 0.1f);
+    EXPECT_EQ(stillClippedShare(light, live, clip_level), 1.0) << stored;
+  }
+  CubeMapRGB below(4);
+  below.faces[0][0] = glm::vec3(static_cast<float>(0.99 * clip_level));
+  EXPECT_EQ(stillClippedShare(light, below, clip_level), 0.0);
+}
+
 }  // namespace
 }  // namespace probelight::ibl
