@@ -45,7 +45,10 @@ ProbeViewCounts ProbeMerge::addView(const ibl::MirrorBallView& view, const ibl::
       std::isfinite(to_probe_exposure) && to_probe_exposure > 0.0 ? to_probe_exposure : 1.0;
   const std::size_t per_face = static_cast<std::size_t>(accumulator_.faceSize()) * accumulator_.faceSize();
   ibl::observeBall(view, map, validity, still_clipped, clip_level_, observation_settings_, observation_);
-  if (frame && !still_clipped) markTexelsTouchingClippedPixels(view, *frame, scale);
+  if (frame && !still_clipped) {
+    markTexelsTouchingClippedPixels(view, *frame, scale);
+    markMeasuredTexelsWithAClippedPixelInTheirFootprint(view, *frame, scale);
+  }
   if (!still_clipped) boundWhereLessSureThanTheBracket(scale);
   if (frame) {
     // The frame's pixels are the light itself (no ball in between): camera
@@ -196,6 +199,57 @@ void ProbeMerge::markTexelsTouchingClippedPixels(const ibl::MirrorBallView& view
               observation_.lower_bound[i] = 1;
           }
       }
+}
+
+// The marking above samples nine directions per clipped pixel; a light
+// smaller than a texel (a sun: 0.5 degrees against 1.4) lies between them
+// as often as not, and the GPU's map samples each texel at its centre: an
+// 8-bit view then reads sky where a bracket measured the sun, and would
+// replace it though the sun is still there, clipped in this very frame.
+// So each texel where the probe holds a bracket's measurement above the
+// clip, and this view reads less, is checked whole: the pixels its corners
+// and centre show, and one more around them (the bilinear sample's reach).
+// A clipped pixel among them makes the view's sample a lower bound. A light
+// that went (no clipped pixel there) is measured, and replaces it.
+void ProbeMerge::markMeasuredTexelsWithAClippedPixelInTheirFootprint(const ibl::MirrorBallView& view,
+                                                                    const FrameBuffer& frame,
+                                                                    double to_probe_exposure) {
+  const int n = accumulator_.faceSize();
+  const std::size_t per_face = static_cast<std::size_t>(n) * n;
+  for (std::size_t i = 0; i < bracket_confidence_.size(); ++i) {
+    if (!(bracket_confidence_[i] > 0.0f) || !(observation_.confidence[i] > 0.0f) || observation_.lower_bound[i] ||
+        !measuredAboveClip(i))
+      continue;
+    const int face = static_cast<int>(i / per_face);
+    const int x = static_cast<int>(i % per_face) % n, y = static_cast<int>(i % per_face) / n;
+    if (!(to_probe_exposure * ibl::luminance(glm::dvec3(observation_.radiance.faces[face][i % per_face])) <
+          ibl::luminance(glm::dvec3(accumulator_.radiance(i)))))
+      continue;
+    glm::dvec2 low(INFINITY), high(-INFINITY);
+    for (const glm::dvec2 at : {glm::dvec2(0.5, 0.5), glm::dvec2(0.0, 0.0), glm::dvec2(1.0, 0.0), glm::dvec2(0.0, 1.0),
+                                glm::dvec2(1.0, 1.0)}) {
+      const ibl::CubeTexelCoord coord{face, (x + at.x) / n, (y + at.y) / n};
+      // Three Newton steps place the pixel to far under the pixel of margin
+      // added below (the solve converges quadratically from the bisector).
+      if (const std::optional<glm::dvec2> pixel =
+              ibl::reflectedDirectionToPixel(view, ibl::cubeCoordToDirection(coord), 3)) {
+        low = glm::min(low, *pixel);
+        high = glm::max(high, *pixel);
+      }
+    }
+    if (!(low.x <= high.x)) continue;  // no part of it in the ball's sight
+    const int x0 = std::max(0, static_cast<int>(std::floor(low.x)) - 1);
+    const int y0 = std::max(0, static_cast<int>(std::floor(low.y)) - 1);
+    const int x1 = std::min(frame.width_px - 1, static_cast<int>(std::ceil(high.x)) + 1);
+    const int y1 = std::min(frame.height_px - 1, static_cast<int>(std::ceil(high.y)) + 1);
+    bool clipped = false;
+    for (int py = y0; py <= y1 && !clipped; ++py)
+      for (int px = x0; px <= x1 && !clipped; ++px) {
+        const glm::u8vec3 code = frame.rgbAt(px, py);
+        clipped = std::max({code.r, code.g, code.b}) >= clip_code_;
+      }
+    if (clipped) observation_.lower_bound[i] = 1;
+  }
 }
 
 void ProbeMerge::followExposure(double exposure_product) {

@@ -87,6 +87,8 @@ class ProbeMerge {
  private:
   void markTexelsTouchingClippedPixels(const ibl::MirrorBallView& view, const FrameBuffer& frame,
                                        double to_probe_exposure);
+  void markMeasuredTexelsWithAClippedPixelInTheirFootprint(const ibl::MirrorBallView& view, const FrameBuffer& frame,
+                                                          double to_probe_exposure);
   // The kept estimate of `texel` is a measurement (not a bound) above what
   // an 8-bit frame shows.
   bool measuredAboveClip(std::size_t texel) const;
