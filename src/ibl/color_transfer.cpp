@@ -24,19 +24,6 @@ std::uint8_t exactSrgbCode(double linear) {
   return static_cast<std::uint8_t>(std::lround(255.0 * linearToSrgb(linear)));
 }
 
-}  // namespace
-
-double srgbCodeToLinear(std::uint8_t code) {
-  static const std::array<double, 256> table = [] {
-    std::array<double, 256> t{};
-    for (int c = 0; c < 256; ++c) t[static_cast<std::size_t>(c)] = srgbToLinear(c / 255.0);
-    return t;
-  }();
-  return table[code];
-}
-
-namespace {
-
 // starts[c - 1]: the smallest linear value that encodes to code c or more.
 struct SrgbCodeStarts {
   static constexpr int kBins = 4096;  // of linear [0, 1]: under one code per bin
@@ -60,6 +47,15 @@ struct SrgbCodeStarts {
 };
 
 }  // namespace
+
+double srgbCodeToLinear(std::uint8_t code) {
+  static const std::array<double, 256> table = [] {
+    std::array<double, 256> t{};
+    for (int c = 0; c < 256; ++c) t[static_cast<std::size_t>(c)] = srgbToLinear(c / 255.0);
+    return t;
+  }();
+  return table[code];
+}
 
 std::uint8_t linearToSrgbCode(double linear) {
   static const SrgbCodeStarts table;
