@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ibl/cube_map.hpp"
+#include "ibl/light_dome.hpp"
 #include "ibl/white_reference.hpp"
 
 namespace probelight {
@@ -24,9 +25,24 @@ class ClippedLightFollower {
   // (a missing share is 0: that light cannot be followed and keeps scale 1).
   void restore(std::vector<ibl::ClippedLight> lights, std::vector<double> share_at_fit, double exposure_at_fit);
 
+  // Each light's share of what clipped at the fit that still clips in a
+  // later map `live` of the same size, in [0, 1] (1: a light that cannot be
+  // followed).
+  std::vector<double> sharesFor(const ibl::CubeMapRGB& live, double clip_level) const;
   // Each light's scale for a later map `live` of the same size, taken at
   // `exposure_now` (exposure time x gain).
   std::vector<double> scalesFor(const ibl::CubeMapRGB& live, double clip_level, double exposure_now) const;
+  // A light part of whose texels stopped clipping while the rest still
+  // clip is ambiguous: the follower cannot tell a light that dimmed at its
+  // edge from one that a sharper view shows smaller than the fit's bracket
+  // did (a sun the bracket saw smeared over the ball's rim, now seen from
+  // the front in one texel); only a new bracket can measure it. The largest
+  // such doubt: the irradiance the follower took from a partly clipping
+  // light (0 < share < 1), at the normal facing it, over the irradiance
+  // `dome` (the fit's lights) gives there. 0 when no light is partly
+  // clipping.
+  double partlyClippingShareOfIrradiance(const std::vector<double>& shares,
+                                         const std::vector<ibl::DomeLight>& dome) const;
 
   bool empty() const { return lights_.empty(); }
   const std::vector<ibl::ClippedLight>& lights() const { return lights_; }

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <chrono>
+#include <cmath>
 #include <iosfwd>
 #include <memory>
 #include <optional>
@@ -51,6 +52,9 @@ class LightsStage {
  public:
   static constexpr const char* kFitStageName = "fit_lights";
   static constexpr const char* kRescaleStageName = "clipped_rescale";
+  // The least time between two recalibrations for a clipped light gone
+  // partly out of the clip (remeasurePartlyClippingLight).
+  static constexpr double kPartlyClippingRefitHoldOffS = 2.0;
   static constexpr const char* kMergeStageName = "bracket_merge";
 
   LightsStage(const PipelineSettings& settings, const RigGeometry& rig, const CameraIntrinsics& camera,
@@ -125,6 +129,7 @@ class LightsStage {
   void saveLighting(const ibl::LightingFit& fit, MapsStage& maps);
   Status followClippedLights(std::uint64_t frame_number, const FrameBuffer& frame, const MapsStage& maps);
   Status checkLightChange(std::uint64_t frame_number, const MapsStage& maps);
+  void remeasurePartlyClippingLight(std::uint64_t frame_number, const std::vector<double>& shares);
   void syncExposureLock(std::uint64_t frames_since_camera_start);
   void showStoredLighting(double now_s);
   double clipLevel() const;
@@ -151,6 +156,7 @@ class LightsStage {
   std::optional<StoredLighting> stored_lighting_;
   double frame_time_s_ = 0.0;  // of the last frame the pipeline ran on
   glm::dvec3 lights_fitted_e_up_{0.0};  // the ground's irradiance when the lights were last fitted
+  double last_fit_time_s_ = -INFINITY;  // frame time of the last fit
   bool exposure_locked_ = false;
   bool said_no_exposure_control_ = false;
 

@@ -4,6 +4,7 @@
 // expected scale follows from the rule by hand.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 #include "ibl/cube_map.hpp"
@@ -87,6 +88,36 @@ TEST(ClippedLightFollower, ALightNothingOfWhichClippedAtTheFitCannotBeFollowed) 
   const std::vector<double> scale = follower.scalesFor(mapClippedAt({}), kClip, 2000.0);
   EXPECT_DOUBLE_EQ(scale[0], 0.5);
   EXPECT_DOUBLE_EQ(scale[1], 0.5);
+}
+
+// What a partly clipping light puts in doubt: the irradiance the follower
+// took from it, at the normal facing it, over what the fit's dome gives
+// there. A light wholly there or wholly gone is no doubt.
+TEST(ClippedLightFollower, APartlyClippingLightsDoubtIsItsTakenIrradianceOverTheDomesAtItsNormal) {
+  std::vector<ibl::ClippedLight> lights = twoLights();
+  lights[0].direction_w = {0.0, 0.0, 1.0};  // the sun, E 4, straight up
+  lights[1].direction_w = {1.0, 0.0, 0.0};  // the lamp, E 1, on the horizon
+  ClippedLightFollower follower;
+  follower.follow(lights, mapClippedAt({64, 65, 66, 67, 80, 81}), kClip, 8000.0);
+  std::vector<ibl::DomeLight> dome(2);
+  dome[0].direction_w = {0.0, 0.0, 1.0};
+  dome[0].rgb = glm::dvec3(10.0);
+  dome[1].direction_w = {1.0, 0.0, 0.0};
+  dome[1].rgb = glm::dvec3(2.0);
+  // Nothing taken.
+  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({1.0, 1.0}, dome), 0.0);
+  // Gone altogether (a lamp switched off): followed, no doubt.
+  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({1.0, 0.0}, dome), 0.0);
+  // Half the sun: 0.5 x 4 taken, of 10 (the horizon light is at 90 degrees).
+  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({0.5, 1.0}, dome), 0.2);
+  // A quarter of the lamp left: 0.75 x 1 of the 2 at its normal; the
+  // larger doubt of the two is the answer.
+  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({0.5, 0.25}, dome), 0.375);
+  // A dome weaker than the light it was fitted with (or none yet): the
+  // light alone is the whole, so the doubt is never above its share taken.
+  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({0.5, 1.0}, {}), 0.5);
+  // Shares that are not numbers are no doubt.
+  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({std::nan(""), 1.0}, dome), 0.0);
 }
 
 TEST(ClippedLightFollower, AnUnknownExposureCountsAsOne) {
