@@ -156,7 +156,8 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
     // every sigma is at least least_sigma: a sample within k times that
     // noise of the estimate passes all three tests below. Most texels of a
     // steady room stop here.
-    const double least_noise_sq = k * k * (noise_.sigma(estimate) * noise_.sigma(estimate) + least_sigma * least_sigma);
+    const double sigma_estimate = noise_.sigma(estimate);
+    const double least_noise_sq = k * k * (sigma_estimate * sigma_estimate + least_sigma * least_sigma);
     if ((own - estimate) * (own - estimate) <= least_noise_sq) continue;
     const int radius = searchRadius(i);
     // A view this unsure of the direction (a ball's rim) cannot tell a
@@ -166,28 +167,42 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
     const int x = static_cast<int>(i % per_face) % n, y = static_cast<int>(i % per_face) / n;
     float lo = INFINITY, hi = -INFINITY;
     bool bounded_above = true;
+    // The tests below widen the estimate's own noise by the sample's, so a
+    // neighbour within k of the estimate's sigma rules out "below" (one at
+    // or under estimate + k sigma) or "above" (one at or over estimate - k
+    // sigma) whatever the rest hold: once both are ruled out the scan
+    // stops. Not for a bound estimate, whose test needs the whole range.
+    const double rules_out_below = estimate + k * sigma_estimate;
+    const double rules_out_above = estimate - k * sigma_estimate;
+    bool may_be_below = true, may_be_above = !kept_bound;
+    const bool may_stop = !kept_bound;
     auto include = [&](std::size_t j) {
       const float value = view_lum[j];
-      if (std::isnan(value)) return;
+      if (std::isnan(value)) return false;
       lo = std::min(lo, value);
       hi = std::max(hi, value);
       if (view.lower_bound[j]) bounded_above = false;
+      if (value <= rules_out_below) may_be_below = false;
+      if (value >= rules_out_above || !bounded_above) may_be_above = false;
+      return may_stop && !may_be_below && !may_be_above;
     };
+    bool ruled_out = false;
     if (x >= radius && y >= radius && x + radius < n && y + radius < n) {
-      for (int dy = -radius; dy <= radius; ++dy) {
+      for (int dy = -radius; dy <= radius && !ruled_out; ++dy) {
         const std::size_t row = i + static_cast<std::ptrdiff_t>(dy) * n;
-        for (int dx = -radius; dx <= radius; ++dx) include(row + dx);
+        for (int dx = -radius; dx <= radius && !ruled_out; ++dx) ruled_out = include(row + dx);
       }
     } else {
-      for (int dy = -radius; dy <= radius; ++dy)
-        for (int dx = -radius; dx <= radius; ++dx) include(texelAt(face, x + dx, y + dy, n));
+      for (int dy = -radius; dy <= radius && !ruled_out; ++dy)
+        for (int dx = -radius; dx <= radius && !ruled_out; ++dx) ruled_out = include(texelAt(face, x + dx, y + dy, n));
     }
-    const double noise = quadratureSum(noise_.sigma(estimate), noise_.sigma(lo));
+    if (ruled_out) continue;
+    const double noise = quadratureSum(sigma_estimate, noise_.sigma(lo));
     // A lower bound estimate says only "at least": only a view that reads
     // less than it, beyond noise, contradicts it.
     const bool below = estimate + k * noise < lo;
-    const bool above = !kept_bound && bounded_above && estimate - k * quadratureSum(noise_.sigma(estimate),
-                                                                                 noise_.sigma(hi)) > hi;
+    const bool above =
+        !kept_bound && bounded_above && estimate - k * quadratureSum(sigma_estimate, noise_.sigma(hi)) > hi;
     const bool bound_broken = kept_bound && !view.lower_bound[i] && own + k * noise < estimate;
     if (below || above || bound_broken) changed[i] = 1;
   }
@@ -212,10 +227,12 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
         const std::size_t j = texelAt(face, x + dx, y + dy, n);
         if (replace[j] || !seenByView(j) || texels_[j].a == 0.0f) continue;
         const double estimate = lum(glm::vec3(texels_[j])), value = view_lum[j];
-        const double noise = quadratureSum(noise_.sigma(estimate), noise_.sigma(value));
         // A clipped sample says "at least": it differs only when above.
         const double difference = view.lower_bound[j] ? value - estimate : std::abs(value - estimate);
-        if (difference > k * noise) {
+        if (!(difference > 0.0)) continue;
+        // difference > k * quadratureSum(both sigmas), squared.
+        const double sigma_estimate = noise_.sigma(estimate), sigma_value = noise_.sigma(value);
+        if (difference * difference > k * k * (sigma_estimate * sigma_estimate + sigma_value * sigma_value)) {
           replace[j] = 1;
           open.push_back(j);
         }
