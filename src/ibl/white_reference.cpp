@@ -387,21 +387,32 @@ std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMa
 
 namespace probelight::ibl {
 
-double stillClippedShare(const ClippedLight& light, const CubeMapRGB& live, double clip_level) {
+ClippedShares clippedShares(const ClippedLight& light, const CubeMapRGB& live, double clip_level,
+                            const std::vector<std::uint8_t>* resolved) {
   // Half a unit in the last place of a half float's 11-bit significand:
   // the most a clamped texel's storage moves it below the clip. A real
   // value that close below still reads 255 (a code step there is ~0.9%).
   constexpr double kStorageRounding = 1.0 / 2048.0;
   const float clipped_at = static_cast<float>(clip_level * (1.0 - kStorageRounding));
   const std::size_t per_face = static_cast<std::size_t>(live.face_size) * live.face_size;
-  double share = 0.0;
+  const bool have_resolved = resolved != nullptr && resolved->size() == per_face * kCubeFaceCount;
+  ClippedShares shares;
   for (std::size_t i = 0; i < light.texels.size(); ++i) {
     const std::size_t face = light.texels[i] / per_face, index = light.texels[i] % per_face;
-    if (face >= static_cast<std::size_t>(kCubeFaceCount)) return 0.0;  // a map of another size
+    if (face >= static_cast<std::size_t>(kCubeFaceCount)) return {};  // a map of another size
     const glm::vec3& texel = live.faces[face][index];
-    if (std::max({texel.r, texel.g, texel.b}) >= clipped_at) share += light.texel_share[i];
+    if (std::max({texel.r, texel.g, texel.b}) >= clipped_at)
+      shares.still_clipped += light.texel_share[i];
+    else if (have_resolved && (*resolved)[light.texels[i]])
+      shares.resolved += light.texel_share[i];
   }
-  return std::min(1.0, share);
+  shares.still_clipped = std::min(1.0, shares.still_clipped);
+  shares.resolved = std::min(1.0, shares.resolved);
+  return shares;
+}
+
+double stillClippedShare(const ClippedLight& light, const CubeMapRGB& live, double clip_level) {
+  return clippedShares(light, live, clip_level, nullptr).still_clipped;
 }
 
 }  // namespace probelight::ibl

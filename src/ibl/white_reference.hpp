@@ -156,6 +156,14 @@ struct ClippedLight {
 // frame-rate maps stay 8-bit; this is how they keep carrying the clipped
 // energy the last calibration measured, and drop it when it leaves.
 double stillClippedShare(const ClippedLight& light, const CubeMapRGB& live, double clip_level);
+// The same, and the share of `light`'s energy in texels that no longer clip
+// and that `resolved` (per texel of `live`; null: none) flags.
+struct ClippedShares {
+  double still_clipped = 0.0;
+  double resolved = 0.0;
+};
+ClippedShares clippedShares(const ClippedLight& light, const CubeMapRGB& live, double clip_level,
+                            const std::vector<std::uint8_t>* resolved);
 std::vector<ClippedLight> clippedLights(const CubeMapRGB& true_map, const CubeMapRGB& clipped_map,
                                         const std::vector<float>* validity, double clip_level,
                                         const std::vector<std::uint8_t>* clipped_mask = nullptr, int max_lights = 4,

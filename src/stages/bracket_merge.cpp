@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "ibl/probe_to_cube.hpp"
+#include "stages/bracket_motion.hpp"
 
 namespace probelight {
 namespace {
@@ -61,10 +62,39 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
   if (!setup.tracker) own_tracker.emplace(setup.detector, setup.rig, setup.view.camera);
   tracking::TagTracker& tracker = setup.tracker ? *setup.tracker : *own_tracker;
   tracker.seed(setup.view.pose);
+  // Where the tag is bright enough to be found, its pose; all tracked
+  // first, so that a dark frame can take the motion the later ones show too.
+  const auto rightSize = [&](const BracketCandidate& candidate) {
+    return candidate.rgb.width == reference.width && candidate.rgb.height == reference.height;
+  };
+  std::vector<tracking::TagTrackResult> tracks(candidates.size());
+  BracketMotion motion(setup.view.pose, setup.reference_time_s);
+  double last_time_s = setup.reference_time_s;
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    if (!rightSize(candidates[k])) continue;
+    std::vector<std::uint8_t> luma;
+    lumaFromRgb(candidates[k].rgb, luma);
+    tracks[k] = tracker.track(luma.data(), candidates[k].rgb.width, candidates[k].rgb.height, candidates[k].rgb.width);
+    if (tracks[k].found) motion.addTracked(candidates[k].time_s, tracks[k].pose);
+    if (std::isfinite(candidates[k].time_s)) last_time_s = std::max(last_time_s, candidates[k].time_s);
+  }
+  auto ballShiftPx = [&](const PoseCamFromWorld& pose) {
+    const ibl::ProbeOutline there =
+        ibl::computeProbeOutline(ibl::MirrorBallView{setup.view.camera, pose, setup.view.center_w, setup.view.radius_m});
+    return there.valid ? glm::length(there.center_px - setup.outline.center_px) : INFINITY;
+  };
+  // A camera still to within the pose's noise keeps the reference's pose
+  // (a dim tag's pose scatters more than a still camera moves); one whose
+  // tagged frames show it moving on beyond that by the bracket's last frame
+  // is followed.
+  const std::optional<PoseCamFromWorld> pose_at_end = motion.poseAt(last_time_s);
+  const bool camera_moves = setup.untracked_take_previous_pose && pose_at_end &&
+                            ballShiftPx(*pose_at_end) > kBracketPoseNoisePx;
   const ImageRGB8* previous = &reference;
   double previous_ev = 0.0;
-  for (const BracketCandidate& candidate : candidates) {
-    if (candidate.rgb.width != reference.width || candidate.rgb.height != reference.height) {
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const BracketCandidate& candidate = candidates[k];
+    if (!rightSize(candidate)) {
       refuse(candidate, "it is " + std::to_string(candidate.rgb.width) + "x" + std::to_string(candidate.rgb.height) +
                             ", the reference frame " + std::to_string(reference.width) + "x" +
                             std::to_string(reference.height));
@@ -75,31 +105,39 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
       refuse(candidate, codes.clipped > 0 ? "the ball is clipped everywhere in it" : "the ball is black everywhere in it");
       continue;
     }
-    // The camera must not have moved: where the tag is bright enough to be
-    // found, the ball must be where the reference frame has it.
-    std::vector<std::uint8_t> luma;
-    lumaFromRgb(candidate.rgb, luma);
-    const tracking::TagTrackResult track =
-        tracker.track(luma.data(), candidate.rgb.width, candidate.rgb.height, candidate.rgb.width);
+    const tracking::TagTrackResult& track = tracks[k];
     std::string pose_check = setup.untracked_take_previous_pose
                                  ? "tag too dark to find: merged with the pose of the frame before"
                                  : "tag too dark to find: merged with the reference frame's pose";
     ibl::MirrorBallView view = setup.untracked_take_previous_pose ? last_view : setup.view;
+    std::optional<double> moved_px;
     if (track.found) {
       view = ibl::MirrorBallView{setup.view.camera, track.pose, setup.view.center_w, setup.view.radius_m};
-      const ibl::ProbeOutline there = ibl::computeProbeOutline(view);
-      const double moved_px = glm::length(there.center_px - setup.outline.center_px);
-      if (!there.valid || moved_px > kBracketMaxBallShiftRadii * setup.outline.radius_px) {
-        refuse(candidate, "the camera moved too far between exposures: the ball is " + fixed(moved_px, 1) +
+      moved_px = ballShiftPx(track.pose);
+    } else if (const std::optional<PoseCamFromWorld> predicted = motion.poseAt(candidate.time_s);
+               camera_moves && predicted) {
+      view = ibl::MirrorBallView{setup.view.camera, *predicted, setup.view.center_w, setup.view.radius_m};
+      moved_px = ballShiftPx(*predicted);
+      pose_check = "tag too dark to find: merged with the pose the camera's motion puts it at, ball " +
+                   fixed(*moved_px, 2) + " px from the reference frame's";
+    }
+    if (moved_px) {
+      // The camera must not have moved far: the ball's rim falls on other
+      // directions in each frame.
+      if (!(*moved_px <= kBracketMaxBallShiftRadii * setup.outline.radius_px)) {
+        refuse(candidate, "the camera moved too far between exposures: the ball is " + fixed(*moved_px, 1) +
                               " px from where the reference frame has it (a tenth of its radius, " +
                               fixed(kBracketMaxBallShiftRadii * setup.outline.radius_px, 1) + " px, is the most)");
         continue;
       }
-      if (moved_px <= kBracketPoseNoisePx) {
+      if (track.found && camera_moves) {
+        pose_check = "merged with its own pose (the camera moves): ball " + fixed(*moved_px, 2) +
+                     " px from the reference frame's";
+      } else if (track.found && *moved_px <= kBracketPoseNoisePx) {
         view = setup.view;
-        pose_check = "ball " + fixed(moved_px, 2) + " px from the reference frame's: within the pose's noise, merged with its pose";
-      } else {
-        pose_check = "merged with its own pose: ball " + fixed(moved_px, 2) + " px from the reference frame's";
+        pose_check = "ball " + fixed(*moved_px, 2) + " px from the reference frame's: within the pose's noise, merged with its pose";
+      } else if (track.found) {
+        pose_check = "merged with its own pose: ball " + fixed(*moved_px, 2) + " px from the reference frame's";
       }
     }
     // The exposure the pixels show against the one claimed.

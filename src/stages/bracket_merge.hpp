@@ -3,6 +3,7 @@
 // from files) and for `run` (frames the camera took at a recalibration).
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <string>
@@ -54,6 +55,7 @@ struct BracketCandidate {
   std::string label;  // a file name, or "camera frame 12"
   double ev = 0.0;    // stops from the reference exposure (< 0: shorter)
   ImageRGB8 rgb;      // the reference's size
+  double time_s = NAN;  // when the camera took it (not finite: unknown, as for files)
 };
 
 struct BracketSetup {
@@ -73,6 +75,11 @@ struct BracketSetup {
   // tag family's decode tables costs tens of milliseconds, so a kiosk keeps
   // one for all its brackets).
   tracking::TagTracker* tracker = nullptr;
+  // When the camera took the reference frame, on the candidates' clock.
+  // With it (and theirs), a camera that moved through the bracket beyond
+  // the pose's noise is followed: a frame too dark to show the tag takes the
+  // pose of the motion the others show (stages/bracket_motion.hpp).
+  double reference_time_s = NAN;
 };
 
 struct BracketMergeResult {
@@ -93,7 +100,9 @@ struct BracketMergeResult {
 // with the reference direction by direction, each through its own pose
 // (ibl::bracketToCubeMap, up to 4 x 4 directions a texel: a sun smaller
 // than a rim pixel is caught, not hit or missed). A frame whose tag is too
-// dark to find takes a pose as setup.untracked_take_previous_pose says.
+// dark to find takes a pose as setup.untracked_take_previous_pose says, or,
+// where the frames' times are known and the tagged ones show the camera
+// moving beyond the pose's noise, the pose that motion puts it at.
 BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<BracketCandidate> candidates,
                                      const BracketSetup& setup,
                                      const std::function<void(const BracketCandidate&, const std::string&)>& refused);

@@ -1,9 +1,6 @@
 #include "stages/clipped_light_follower.hpp"
 
 #include <algorithm>
-#include <cmath>
-
-#include "ibl/color_transfer.hpp"
 
 namespace probelight {
 
@@ -27,12 +24,18 @@ void ClippedLightFollower::restore(std::vector<ibl::ClippedLight> lights, std::v
   exposure_at_fit_ = exposure_at_fit;
 }
 
-std::vector<double> ClippedLightFollower::sharesFor(const ibl::CubeMapRGB& live, double clip_level) const {
+std::vector<double> ClippedLightFollower::sharesFor(const ibl::CubeMapRGB& live, double clip_level,
+                                                    const std::vector<std::uint8_t>* resolved) const {
   std::vector<double> share(lights_.size(), 1.0);
   for (std::size_t k = 0; k < lights_.size(); ++k) {
     const double at_fit = share_at_fit_[k];
     // Nothing of it clipped in the map at the fit: it cannot be followed.
-    if (at_fit > 0.0) share[k] = std::min(1.0, ibl::stillClippedShare(lights_[k], live, clip_level) / at_fit);
+    if (!(at_fit > 0.0)) continue;
+    const ibl::ClippedShares now = ibl::clippedShares(lights_[k], live, clip_level, resolved);
+    // A light nothing of which clips has gone, whatever was resolved.
+    share[k] = now.still_clipped > 0.0
+                   ? std::min(1.0, now.still_clipped / std::max(at_fit - now.resolved, now.still_clipped))
+                   : 0.0;
   }
   return share;
 }
@@ -43,25 +46,6 @@ std::vector<double> ClippedLightFollower::scalesFor(const ibl::CubeMapRGB& live,
   std::vector<double> scale = sharesFor(live, clip_level);
   for (double& s : scale) s *= exposure_ratio;
   return scale;
-}
-
-double ClippedLightFollower::partlyClippingShareOfIrradiance(const std::vector<double>& shares,
-                                                             const std::vector<ibl::DomeLight>& dome) const {
-  double largest = 0.0;
-  for (std::size_t k = 0; k < lights_.size() && k < shares.size(); ++k) {
-    if (!(shares[k] > 0.0 && shares[k] < 1.0)) continue;  // whole, gone, or not a number
-    const glm::dvec3 toward = lights_[k].direction_w;
-    const double taken = (1.0 - shares[k]) * ibl::luminance(lights_[k].irradiance_rgb);
-    // The dome is fitted to the whole measured light, this one's included.
-    double there = 0.0;
-    for (const ibl::DomeLight& light : dome)
-      there += ibl::luminance(light.rgb) * std::max(0.0, glm::dot(light.direction_w, toward));
-    // A dome that says nothing there (none yet): the light alone.
-    const double whole = there > 0.0 ? std::max(there, ibl::luminance(lights_[k].irradiance_rgb))
-                                     : ibl::luminance(lights_[k].irradiance_rgb);
-    if (whole > 0.0 && std::isfinite(taken / whole)) largest = std::max(largest, taken / whole);
-  }
-  return largest;
 }
 
 }  // namespace probelight

@@ -7,10 +7,10 @@
 // units). Pure: the caller reads the map back.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "ibl/cube_map.hpp"
-#include "ibl/light_dome.hpp"
 #include "ibl/white_reference.hpp"
 
 namespace probelight {
@@ -27,22 +27,16 @@ class ClippedLightFollower {
 
   // Each light's share of what clipped at the fit that still clips in a
   // later map `live` of the same size, in [0, 1] (1: a light that cannot be
-  // followed).
-  std::vector<double> sharesFor(const ibl::CubeMapRGB& live, double clip_level) const;
+  // followed). `resolved` (per texel of `live`, or null): texels a view
+  // sharper than the fit's bracket has shown to hold something else (a sun
+  // the bracket saw smeared over the ball's rim, now seen in one texel, the
+  // rest sky): they are no longer the light's, and their going out of the
+  // clip does not dim it while the rest of it still clips.
+  std::vector<double> sharesFor(const ibl::CubeMapRGB& live, double clip_level,
+                                const std::vector<std::uint8_t>* resolved = nullptr) const;
   // Each light's scale for a later map `live` of the same size, taken at
   // `exposure_now` (exposure time x gain).
   std::vector<double> scalesFor(const ibl::CubeMapRGB& live, double clip_level, double exposure_now) const;
-  // A light part of whose texels stopped clipping while the rest still
-  // clip is ambiguous: the follower cannot tell a light that dimmed at its
-  // edge from one that a sharper view shows smaller than the fit's bracket
-  // did (a sun the bracket saw smeared over the ball's rim, now seen from
-  // the front in one texel); only a new bracket can measure it. The largest
-  // such doubt: the irradiance the follower took from a partly clipping
-  // light (0 < share < 1), at the normal facing it, over the irradiance
-  // `dome` (the fit's lights) gives there. 0 when no light is partly
-  // clipping.
-  double partlyClippingShareOfIrradiance(const std::vector<double>& shares,
-                                         const std::vector<ibl::DomeLight>& dome) const;
 
   bool empty() const { return lights_.empty(); }
   const std::vector<ibl::ClippedLight>& lights() const { return lights_; }

@@ -102,7 +102,8 @@ FrameAdmission LightsStage::admit(const FrameContext& ctx) {
   }
   bracket_over_ = arrival.bracket_over;
   if (arrival.keep_as_rung)
-    bracket_frames_->frames.push_back({"camera frame " + std::to_string(ctx.number), arrival.rung_ev, std::move(*rgb)});
+    bracket_frames_->frames.push_back(
+        {"camera frame " + std::to_string(ctx.number), arrival.rung_ev, std::move(*rgb), ctx.time_s});
   if (arrival.not_delivered) {
     std::ostringstream message;
     message << "frame " << ctx.number << ": the camera did not deliver EV " << std::fixed << std::setprecision(1)
@@ -162,7 +163,7 @@ Status LightsStage::run(FrameContext& ctx, MapsStage& maps) {
         if (started == BracketStart::kStarted) {
           if (!rgb) rgb = ctx.frame.toRgb();
           bracket_frames_ = BracketFrames{std::move(*rgb), ctx.view, ctx.outline, exposure_locked_, {},
-                                          std::chrono::steady_clock::now(), 0.0};
+                                          std::chrono::steady_clock::now(), 0.0, ctx.time_s};
           break;
         }
       }
@@ -210,7 +211,8 @@ Status LightsStage::finishBracket(std::uint64_t frame_number, MapsStage& maps) {
   // The camera took them in order: a frame too dark to show the tag was
   // taken right after the one before it.
   const BracketSetup setup{taken.view, taken.outline, rig_, tagDetectorSettings(settings_, rig_), merge,
-                           maps.maps().reflection().face_size, true, bracket_tracker_.get()};
+                           maps.maps().reflection().face_size, true, bracket_tracker_.get(),
+                           taken.reference_time_s};
   BracketMergeResult merged;
   const auto merge_started = std::chrono::steady_clock::now();
   {
@@ -296,7 +298,6 @@ Status LightsStage::fitLights(std::uint64_t frame_number, const FitFrame& fit_fr
                   exposureProduct(fit_frame.exposure.exposure_us, fit_frame.exposure.analogue_gain));
   ibl::setClippedLights(lighting_, clipped_.lights());
   transition_.retarget(fit.dome, frame_time_s_);
-  last_fit_time_s_ = frame_time_s_;
   // What checkLightChange compares with later: the same estimate, from the
   // same map.
   if (const std::optional<ibl::CubeMapRGB> diffuse = maps.maps().readDiffuse(error))
@@ -364,7 +365,11 @@ Status LightsStage::followClippedLights(std::uint64_t frame_number, const FrameB
     std::string error;
     const std::optional<ibl::CubeMapRGB> live = maps.maps().readReflection(error);
     if (!live) return Status::runtimeFailure(error);
-    shares = clipped_.sharesFor(*live, clipLevel());
+    // With the probe over views, the texels a sharper view showed the fit's
+    // bracket had smeared a light over are no longer the light's.
+    const std::vector<std::uint8_t> resolved =
+        maps.probe() ? maps.probe()->texelsResolvedBySharperViews() : std::vector<std::uint8_t>{};
+    shares = clipped_.sharesFor(*live, clipLevel(), maps.probe() ? &resolved : nullptr);
     const double exposure_ratio =
         exposureProduct(frame.metadata.exposure_us, frame.metadata.analogue_gain) / clipped_.exposureAtFit();
     for (const double share : shares) scale.push_back(share * exposure_ratio);
@@ -372,36 +377,7 @@ Status LightsStage::followClippedLights(std::uint64_t frame_number, const FrameB
   ibl::setClippedLights(lighting_, clipped_.lights(), scale);
   report_.count("clipped_rescales");
   clipped_now_report_ = {{"frame", frame_number}, {"scale", scale}, {"still_clipping_share", shares}};
-  // With the probe over views a light goes partly out of the clip for a
-  // reason a single view never shows: a sharper view than the bracket's.
-  if (maps.probe()) remeasurePartlyClippingLight(frame_number, shares);
   return Status::ok();
-}
-
-// The probe over views (environment_maps.merge_views) keeps each view's
-// sharpest sight of a direction. A fit's bracket that saw a sun squeezed
-// into the ball's rim spread it over many texels; a later view from the
-// front shows it in one, the rest sky, and the follower, which counts the
-// texels still clipping, would take most of the sun away though it is
-// still there. It cannot tell that from a lamp dimmed at its edge; a new
-// bracket can. So when the irradiance in doubt, at the normal facing such
-// a light, is a large change (lights.refit_change_fraction, as for a lamp
-// switched on), the lights are recalibrated, at most once every
-// kPartlyClippingRefitHoldOffS (a bracket darkens the picture for a few
-// frames; a light that keeps changing is followed, not chased).
-void LightsStage::remeasurePartlyClippingLight(std::uint64_t frame_number, const std::vector<double>& shares) {
-  if (machine_.state() != AppState::kRunning || bracket_.pending() || transition_.empty() ||
-      !(frame_time_s_ - last_fit_time_s_ >= kPartlyClippingRefitHoldOffS))
-    return;
-  const double doubt = clipped_.partlyClippingShareOfIrradiance(shares, transition_.target());
-  if (!(doubt > settings_.lights.refit_change_fraction)) return;
-  report_.count("refits_for_partly_clipping_light");
-  std::ostringstream message;
-  message << "frame " << frame_number << ": part of a clipped light stopped clipping (" << std::fixed
-          << std::setprecision(0) << 100.0 * doubt
-          << "% of the light facing it in doubt): measuring it again";
-  info(message.str());
-  machine_.onButtonPress();
 }
 
 // lights.refit_when_light_changes: at each map update (the policy already

@@ -52,9 +52,6 @@ class LightsStage {
  public:
   static constexpr const char* kFitStageName = "fit_lights";
   static constexpr const char* kRescaleStageName = "clipped_rescale";
-  // The least time between two recalibrations for a clipped light gone
-  // partly out of the clip (remeasurePartlyClippingLight).
-  static constexpr double kPartlyClippingRefitHoldOffS = 2.0;
   static constexpr const char* kMergeStageName = "bracket_merge";
 
   LightsStage(const PipelineSettings& settings, const RigGeometry& rig, const CameraIntrinsics& camera,
@@ -120,6 +117,7 @@ class LightsStage {
     std::vector<BracketCandidate> frames;
     std::chrono::steady_clock::time_point started;
     double own_s = 0.0;  // probelight's own work on the bracket's frames (the rest of the wall time is the camera's)
+    double reference_time_s = NAN;  // the reference frame's time (FrameContext::time_s)
   };
 
   bool startBracket(const FrameContext& ctx);
@@ -129,7 +127,6 @@ class LightsStage {
   void saveLighting(const ibl::LightingFit& fit, MapsStage& maps);
   Status followClippedLights(std::uint64_t frame_number, const FrameBuffer& frame, const MapsStage& maps);
   Status checkLightChange(std::uint64_t frame_number, const MapsStage& maps);
-  void remeasurePartlyClippingLight(std::uint64_t frame_number, const std::vector<double>& shares);
   void syncExposureLock(std::uint64_t frames_since_camera_start);
   void showStoredLighting(double now_s);
   double clipLevel() const;
@@ -156,7 +153,6 @@ class LightsStage {
   std::optional<StoredLighting> stored_lighting_;
   double frame_time_s_ = 0.0;  // of the last frame the pipeline ran on
   glm::dvec3 lights_fitted_e_up_{0.0};  // the ground's irradiance when the lights were last fitted
-  double last_fit_time_s_ = -INFINITY;  // frame time of the last fit
   bool exposure_locked_ = false;
   bool said_no_exposure_control_ = false;
 

@@ -74,7 +74,7 @@ ProbeViewCounts ProbeMerge::addView(const ibl::MirrorBallView& view, const ibl::
   if (still_clipped) {
     const std::vector<glm::vec4>& kept = accumulator_.texels();
     for (std::size_t i = 0; i < kept.size(); ++i)
-      if (observation_.confidence[i] > 0.0f && !observation_.lower_bound[i] && kept[i].a != 0.0f && bracket_confidence_[i] == 0.0f &&
+      if (observation_.confidence[i] > 0.0f && !observation_.lower_bound[i] && kept[i].a != 0.0f && !(bracket_confidence_[i] > 0.0f) &&
           ibl::luminance(glm::dvec3(observation_.radiance.faces[i / per_face][i % per_face])) >
               ibl::luminance(glm::dvec3(glm::vec3(kept[i]))))
         accumulator_.demoteToLowerBound(i);
@@ -87,14 +87,24 @@ ProbeViewCounts ProbeMerge::addView(const ibl::MirrorBallView& view, const ibl::
 // After each view: the texels a bracket measured (with how surely), and
 // those where a later 8-bit sample replaced its measurement.
 void ProbeMerge::trackBracketTexels(bool bracket) {
-  const std::size_t per_face = static_cast<std::size_t>(accumulator_.faceSize()) * accumulator_.faceSize();
+  const int n = accumulator_.faceSize();
+  const std::size_t per_face = static_cast<std::size_t>(n) * n;
+  // Surer than this, a direction is known to within the largest texel's
+  // angle: a bracket that sure smeared nothing over the texel.
+  const double texel_angle_rad = 0.5 * std::numbers::pi / n;
+  const float sure_within_a_texel = static_cast<float>(1.0 / (texel_angle_rad * texel_angle_rad));
   for (std::size_t i = 0; i < bracket_confidence_.size(); ++i) {
     if (observation_.confidence[i] <= 0.0f) continue;
     if (bracket) {
       bracket_confidence_[i] = observation_.lower_bound[i] ? 0.0f : observation_.confidence[i];
     } else if (bracket_confidence_[i] > 0.0f && !observation_.lower_bound[i] &&
                glm::vec3(accumulator_.texels()[i]) == observation_.radiance.faces[i / per_face][i % per_face]) {
-      bracket_confidence_[i] = 0.0f;  // the light changed there: this view's sample replaced the bracket's
+      // This view's sample replaced the bracket's: the light changed there,
+      // or (a bracket unsure of the direction, a view at least as sure)
+      // what the bracket smeared over the texel is elsewhere.
+      const bool resolves_a_smear = bracket_confidence_[i] < sure_within_a_texel &&
+                                    observation_.confidence[i] >= bracket_confidence_[i];
+      bracket_confidence_[i] = resolves_a_smear ? kResolvedBySharperView : 0.0f;
     }
   }
 }
@@ -250,6 +260,13 @@ void ProbeMerge::markMeasuredTexelsWithAClippedPixelInTheirFootprint(const ibl::
       }
     if (clipped) observation_.lower_bound[i] = 1;
   }
+}
+
+std::vector<std::uint8_t> ProbeMerge::texelsResolvedBySharperViews() const {
+  std::vector<std::uint8_t> resolved(bracket_confidence_.size());
+  for (std::size_t i = 0; i < resolved.size(); ++i)
+    resolved[i] = bracket_confidence_[i] == kResolvedBySharperView ? 1 : 0;
+  return resolved;
 }
 
 void ProbeMerge::followExposure(double exposure_product) {

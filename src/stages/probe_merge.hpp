@@ -79,6 +79,16 @@ class ProbeMerge {
   // it would change.
   std::array<double, 6> axisIrradiance() const;
   const ibl::ProbeAccumulator& accumulator() const { return accumulator_; }
+  // Per texel, 1 where a bracket that knew the texel's direction only to
+  // more than a texel (confidence 1 / sigma^2: it saw it in the ball's rim,
+  // where it smears a sun over several texels) measured it, and an 8-bit
+  // view that knows the direction at least as well replaced that
+  // measurement: what the bracket smeared over the texel is elsewhere.
+  // Cleared where a bracket measures the texel again. What the
+  // clipped-light follower leaves out of a light
+  // (ClippedLightFollower::sharesFor). A bracket that saw the texel sharply
+  // cannot have smeared a light over it: a change there is the light's.
+  std::vector<std::uint8_t> texelsResolvedBySharperViews() const;
 
   // A saved probe (stages/state_store): false, nothing changed, when it
   // does not fit this probe (face size, values).
@@ -107,7 +117,9 @@ class ProbeMerge {
   std::vector<std::uint8_t> touched_by_clipped_;  // ... and the texels a clipped pixel reaches
   std::vector<std::uint8_t> near_clipped_pixels_;  // ... from these pixels
   // How sure the bracket whose measurement a texel holds was of its
-  // direction (0: the texel holds no bracket's measurement).
+  // direction (0: the texel holds no bracket's measurement;
+  // kResolvedBySharperView: a sharper view replaced it).
+  static constexpr float kResolvedBySharperView = -1.0f;
   std::vector<float> bracket_confidence_;
   double exposure_product_ = 0.0;
 };

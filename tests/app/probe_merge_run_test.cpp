@@ -134,31 +134,44 @@ TEST_F(ProbeMergeRun, AMovingCameraKeepsWhatTheBracketMeasured) {
   }
 }
 
-// A sun squeezed into the ball's rim when the start-up bracket measured
-// it: the bracket spread it over a dozen texels. A hand-held sweep then sees
-// it from the front, in one texel, the rest sky, and the follower, counting
-// the texels still clipping, took most of the sun away though it was still
-// there (the lit error rose from 13.5% to 17.8% at frame 70 and stayed,
-// worse than one view's). The kiosk now brackets again when the
-// irradiance in doubt is a large change (lights.refit_change_fraction),
-// and measures the sun where it now sees it: 7.1% from frame 90, against
-// the single view's 12.5% (17.8% without the new bracket). The sunrise turned so that its sun lies behind
-// the ball at the start (scripts/probe-merge-table.sh's configuration).
-TEST_F(ProbeMergeRun, ASunASharperViewShowsSmallerIsMeasuredAgain) {
+// The sunrise turned so that its sun lies behind the ball at the start
+// (scripts/probe-merge-table.sh's configuration), and a hand-held sweep
+// (12 degrees a second at the start). Two things went wrong here:
+//  - The start-up bracket's darkest frames, where the tag is too dark to
+//    find and only the sun shows, took the reference frame's pose though
+//    the camera had moved on 1-1.7 px of ball: the sun they measure was
+//    misplaced (13.5% at frame 20, against 3.7% for a still camera). They
+//    now take the pose the tagged frames' motion puts them at
+//    (stages/bracket_motion): 1.8%.
+//  - The bracket saw the sun in the ball's rim, smeared over many texels;
+//    later views that see those directions at least as sharply read sky
+//    there and replace the smear, and the clipped-light follower, counting
+//    the texels still clipping, took 13% of the sun away though it never
+//    changed (4.9% by frame 180, the single view 2.0%). Texels so resolved
+//    now leave the light instead of dimming it: 2.7%, the share 0.97.
+TEST_F(ProbeMergeRun, AHandHeldSweepKeepsTheSunItsBracketMeasured) {
   const std::string sunrise = "sim:\n  env: sunrise\n  environment_rotation_deg: 210\n";
-  const nlohmann::json report = runWith("sharper", sunrise, "--frames 110 --path hand_held_sweep");
-  const nlohmann::json single = runWith(
-      "sharper_single", sunrise + "environment_maps:\n  merge_views: false\n", "--frames 110 --path hand_held_sweep");
-  EXPECT_EQ(report["counters"]["refits_for_partly_clipping_light"], 1) << report["counters"].dump();
-  EXPECT_EQ(report["probe_merge"]["brackets"], 2) << report["probe_merge"].dump();
-  EXPECT_EQ(single["counters"].value("refits_for_partly_clipping_light", 0), 0) << "only the probe sees sharper";
-  // Measured again: better than the start-up fit, and than one view. Each
-  // margin is a point: the truth check's spread between noise samples is
-  // under 0.2 points (StaticCameraKeepsTheMapsYetStaysAccurateAndSteadier).
-  for (int frame : {90, 100}) {
-    EXPECT_LT(errorAt(report, frame, kLitVsHdr), errorAt(report, 30, kLitVsHdr) - 0.01) << "frame " << frame;
-    EXPECT_LT(errorAt(report, frame, kLitVsHdr), errorAt(single, frame, kLitVsHdr) - 0.01) << "frame " << frame;
-  }
+  const nlohmann::json sweep = runWith("sweep", sunrise, "--frames 200 --path hand_held_sweep");
+  const nlohmann::json still = runWith("still", sunrise, "--frames 30 --path static");
+  const nlohmann::json single = runWith("sweep_single", sunrise + "environment_maps:\n  merge_views: false\n",
+                                        "--frames 200 --path hand_held_sweep");
+  int moved_frames = 0;
+  for (const nlohmann::json& frame : sweep["hdr"]["frames"])
+    if (frame.value("pose", "").find("the camera's motion puts it at") != std::string::npos) ++moved_frames;
+  EXPECT_GE(moved_frames, 1) << sweep["hdr"]["frames"].dump();
+  // As good as the same world from a still camera, to a point (the truth
+  // check's spread between noise samples is under 0.2 points).
+  EXPECT_LT(errorAt(sweep, 20, kLitVsHdr), errorAt(still, 20, kLitVsHdr) + 0.01);
+  // The sun never changes: what is left of the fit's clipped light, at
+  // most 5% gone (edge texels the views read below the clip at the same
+  // sharpness as the bracket: they may be a dimmed edge, and count so).
+  const nlohmann::json& shares = sweep["clipped_lights_now"]["still_clipping_share"];
+  ASSERT_FALSE(shares.empty()) << sweep["clipped_lights_now"].dump();
+  for (const nlohmann::json& share : shares) EXPECT_GE(share.get<double>(), 0.95);
+  // And the probe stays within a point of one view once both have settled
+  // (the single view's clipped light leaves it around frame 70: 15%).
+  for (int frame = 90; frame <= 190; frame += 20)
+    EXPECT_LT(errorAt(sweep, frame, kLitVsHdr), errorAt(single, frame, kLitVsHdr) + 0.01) << "frame " << frame;
 }
 
 }  // namespace

@@ -4,7 +4,7 @@
 // expected scale follows from the rule by hand.
 #include <gtest/gtest.h>
 
-#include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "ibl/cube_map.hpp"
@@ -90,34 +90,34 @@ TEST(ClippedLightFollower, ALightNothingOfWhichClippedAtTheFitCannotBeFollowed) 
   EXPECT_DOUBLE_EQ(scale[1], 0.5);
 }
 
-// What a partly clipping light puts in doubt: the irradiance the follower
-// took from it, at the normal facing it, over what the fit's dome gives
-// there. A light wholly there or wholly gone is no doubt.
-TEST(ClippedLightFollower, APartlyClippingLightsDoubtIsItsTakenIrradianceOverTheDomesAtItsNormal) {
-  std::vector<ibl::ClippedLight> lights = twoLights();
-  lights[0].direction_w = {0.0, 0.0, 1.0};  // the sun, E 4, straight up
-  lights[1].direction_w = {1.0, 0.0, 0.0};  // the lamp, E 1, on the horizon
+// Texels a sharper view than the fit's bracket resolved (it showed them
+// holding something else) leave the light: their going out of the clip
+// does not dim it while the rest still clips; a light nothing of which
+// clips has gone whatever was resolved; a texel that clips counts as the
+// light's even where flagged.
+TEST(ClippedLightFollower, TexelsASharperViewResolvedLeaveTheLightWithoutDimmingIt) {
   ClippedLightFollower follower;
-  follower.follow(lights, mapClippedAt({64, 65, 66, 67, 80, 81}), kClip, 8000.0);
-  std::vector<ibl::DomeLight> dome(2);
-  dome[0].direction_w = {0.0, 0.0, 1.0};
-  dome[0].rgb = glm::dvec3(10.0);
-  dome[1].direction_w = {1.0, 0.0, 0.0};
-  dome[1].rgb = glm::dvec3(2.0);
-  // Nothing taken.
-  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({1.0, 1.0}, dome), 0.0);
-  // Gone altogether (a lamp switched off): followed, no doubt.
-  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({1.0, 0.0}, dome), 0.0);
-  // Half the sun: 0.5 x 4 taken, of 10 (the horizon light is at 90 degrees).
-  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({0.5, 1.0}, dome), 0.2);
-  // A quarter of the lamp left: 0.75 x 1 of the 2 at its normal; the
-  // larger doubt of the two is the answer.
-  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({0.5, 0.25}, dome), 0.375);
-  // A dome weaker than the light it was fitted with (or none yet): the
-  // light alone is the whole, so the doubt is never above its share taken.
-  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({0.5, 1.0}, {}), 0.5);
-  // Shares that are not numbers are no doubt.
-  EXPECT_DOUBLE_EQ(follower.partlyClippingShareOfIrradiance({std::nan(""), 1.0}, dome), 0.0);
+  follower.follow(twoLights(), mapClippedAt({64, 65, 66, 67, 80, 81}), kClip, 8000.0);
+  std::vector<std::uint8_t> resolved(6 * 16, 0);
+  resolved[66] = resolved[67] = 1;  // half the sun was a smear: sky there
+  // Sun: 0.5 still clips, 0.5 resolved: all of what is left of it is there.
+  // Lamp: its 0.75 texel went out (not resolved), 0.25 left.
+  std::vector<double> share = follower.sharesFor(mapClippedAt({64, 65, 81}), kClip, &resolved);
+  EXPECT_DOUBLE_EQ(share[0], 1.0);
+  EXPECT_NEAR(share[1], 0.25, 1e-7);
+  // Without the flags, the same map halves the sun.
+  EXPECT_DOUBLE_EQ(follower.sharesFor(mapClippedAt({64, 65, 81}), kClip)[0], 0.5);
+  // One of the two still-clipping sun texels goes out unresolved: a quarter
+  // of the sun's fit-time share is gone of the half that is still its.
+  share = follower.sharesFor(mapClippedAt({64, 81}), kClip, &resolved);
+  EXPECT_DOUBLE_EQ(share[0], 0.5);
+  // Nothing of the sun clips: gone.
+  EXPECT_DOUBLE_EQ(follower.sharesFor(mapClippedAt({81}), kClip, &resolved)[0], 0.0);
+  // A flagged texel that clips again is the light's.
+  EXPECT_DOUBLE_EQ(follower.sharesFor(mapClippedAt({64, 65, 66, 67, 81}), kClip, &resolved)[0], 1.0);
+  // Flags for a map of another size are ignored.
+  const std::vector<std::uint8_t> wrong_size(10, 1);
+  EXPECT_DOUBLE_EQ(follower.sharesFor(mapClippedAt({64, 65, 81}), kClip, &wrong_size)[0], 0.5);
 }
 
 TEST(ClippedLightFollower, AnUnknownExposureCountsAsOne) {
