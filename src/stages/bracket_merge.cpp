@@ -125,8 +125,10 @@ BracketMergeResult mergeBracketProbe(const ImageRGB8& reference, std::vector<Bra
       // The camera must not have moved far: the ball's rim falls on other
       // directions in each frame.
       if (!(*moved_px <= kBracketMaxBallShiftRadii * setup.outline.radius_px)) {
-        refuse(candidate, "the camera moved too far between exposures: the ball is " + fixed(*moved_px, 1) +
-                              " px from where the reference frame has it (a tenth of its radius, " +
+        const std::string where = std::isfinite(*moved_px)
+                                      ? "is " + fixed(*moved_px, 1) + " px from where the reference frame has it"
+                                      : "is out of the camera's view";
+        refuse(candidate, "the camera moved too far between exposures: the ball " + where + " (a tenth of its radius, " +
                               fixed(kBracketMaxBallShiftRadii * setup.outline.radius_px, 1) + " px, is the most)");
         continue;
       }

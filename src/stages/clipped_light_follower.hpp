@@ -37,6 +37,8 @@ class ClippedLightFollower {
   // Each light's scale for a later map `live` of the same size, taken at
   // `exposure_now` (exposure time x gain).
   std::vector<double> scalesFor(const ibl::CubeMapRGB& live, double clip_level, double exposure_now) const;
+  // The same from shares sharesFor gave.
+  std::vector<double> scalesFor(std::vector<double> shares, double exposure_now) const;
 
   bool empty() const { return lights_.empty(); }
   const std::vector<ibl::ClippedLight>& lights() const { return lights_; }

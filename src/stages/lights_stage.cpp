@@ -370,9 +370,7 @@ Status LightsStage::followClippedLights(std::uint64_t frame_number, const FrameB
     const std::vector<std::uint8_t> resolved =
         maps.probe() ? maps.probe()->texelsResolvedBySharperViews() : std::vector<std::uint8_t>{};
     shares = clipped_.sharesFor(*live, clipLevel(), maps.probe() ? &resolved : nullptr);
-    const double exposure_ratio =
-        exposureProduct(frame.metadata.exposure_us, frame.metadata.analogue_gain) / clipped_.exposureAtFit();
-    for (const double share : shares) scale.push_back(share * exposure_ratio);
+    scale = clipped_.scalesFor(shares, exposureProduct(frame.metadata.exposure_us, frame.metadata.analogue_gain));
   }
   ibl::setClippedLights(lighting_, clipped_.lights(), scale);
   report_.count("clipped_rescales");

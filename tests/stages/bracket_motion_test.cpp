@@ -7,25 +7,17 @@
 #include <cmath>
 #include <numbers>
 
+#include "sim/camera_path.hpp"
 #include "stages/bracket_motion.hpp"
 
 namespace probelight {
 namespace {
 
 // A camera 0.55 m from the origin, 25 degrees up, at azimuth `azimuth_rad`,
-// looking at the origin (z up).
+// looking at the origin (the simulator's orbit).
 PoseCamFromWorld cameraAt(double azimuth_rad) {
-  const double elevation = 25.0 * std::numbers::pi / 180.0;
-  const glm::dvec3 eye = 0.55 * glm::dvec3(std::cos(elevation) * std::cos(azimuth_rad),
-                                           std::cos(elevation) * std::sin(azimuth_rad), std::sin(elevation));
-  const glm::dvec3 forward = glm::normalize(-eye);
-  const glm::dvec3 right = glm::normalize(glm::cross(forward, glm::dvec3(0.0, 0.0, 1.0)));
-  const glm::dvec3 down = glm::cross(forward, right);
-  PoseCamFromWorld pose;
-  // Rows: the camera's x (right), y (down), z (forward) in the world.
-  pose.R_cam_from_world = glm::transpose(glm::dmat3(right, down, forward));
-  pose.t_cam_from_world = -(pose.R_cam_from_world * eye);
-  return pose;
+  const glm::dvec3 origin(0.0);
+  return sim::lookAtPose(sim::orbitEye(origin, 0.55, 25.0, azimuth_rad * 180.0 / std::numbers::pi), origin);
 }
 
 double rotationErrorDeg(const PoseCamFromWorld& a, const PoseCamFromWorld& b) {
