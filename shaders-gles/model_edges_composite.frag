@@ -9,6 +9,14 @@
 // each weighted 1/4 (a power of two: the scaling is exact in any precision;
 // the sum of four values under 1 keeps mediump's 2^-11 to under half an
 // 8-bit step). GRID 1: the texel itself (NEAREST), already resolved by the GPU.
+//
+// MATCH_SENSOR_NOISE (the grids): the frame's noise is added here, after the
+// resolve, not by the model's shader: the mean of GRID^2 sub-samples would
+// divide its sigma by GRID. The layer holds the model's colour c times its
+// coverage a, so the noise enters times a as well: a (c + n) + (1 - a) video.
+#include "color_transfer.glsl"
+#include "camera_transfer.glsl"
+#include "camera_response.glsl"
 #if GRID == 4
 varying vec4 v_taps_low;
 varying vec4 v_taps_high;
@@ -19,9 +27,13 @@ uniform sampler2D u_layer;
 
 void main() {
 #if GRID == 4
-  gl_FragColor = 0.25 * (texture2D(u_layer, v_taps_low.xy) + texture2D(u_layer, v_taps_low.zw)) +
-                 0.25 * (texture2D(u_layer, v_taps_high.xy) + texture2D(u_layer, v_taps_high.zw));
+  vec4 layer = 0.25 * (texture2D(u_layer, v_taps_low.xy) + texture2D(u_layer, v_taps_low.zw)) +
+               0.25 * (texture2D(u_layer, v_taps_high.xy) + texture2D(u_layer, v_taps_high.zw));
 #else
-  gl_FragColor = texture2D(u_layer, v_tap);
+  vec4 layer = texture2D(u_layer, v_tap);
 #endif
+#ifdef MATCH_SENSOR_NOISE
+  layer.rgb += layer.a * sensorNoise(layer.rgb / max(layer.a, 1.0 / 255.0));
+#endif
+  gl_FragColor = layer;
 }

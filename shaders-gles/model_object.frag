@@ -2,7 +2,9 @@
 // A glTF metallic-roughness surface lit from the maps, as
 // ibl::shadeMetallicRoughness (src/ibl/metallic_roughness.hpp):
 //   c = occlusion [c_diff (1 - E_s) D(n) + E_s R(r, roughness)] + emissive,
-// then sRGB-encoded (clamped).
+// then through the camera's response (camera_response.glsl: its transfer,
+// and its noise when matched and the model is not drawn into a supersampled
+// layer, whose resolve adds the noise instead: model_edges_composite.frag).
 //
 // Built per material (passes/model_renderer.cpp): each texture the material
 // has defines <SLOT>_TEXTURE and <SLOT>_UV (the varying of its TEXCOORD
@@ -18,8 +20,9 @@
 // of the rung alphas, constants at least 0.04 apart.
 #include "color_transfer.glsl"
 #include "cube_storage.glsl"
-#ifdef NEAR_FLOOR_CAMERA
 #include "camera_transfer.glsl"
+#include "camera_response.glsl"
+#ifdef NEAR_FLOOR_CAMERA
 #include "camera_projection.glsl"
 #endif
 #include "depth_packing.glsl"
@@ -418,5 +421,5 @@ void main() {
 #else
   vec3 color = occlusion * (c_diff * (1.0 - specular_reflectance) * diffuse + specular_reflectance * specular) + emissive;
 #endif
-  gl_FragColor = vec4(linearToSrgb(color), alpha);
+  gl_FragColor = vec4(cameraOutput(color), alpha);
 }

@@ -1,5 +1,6 @@
 #version 100
-// Stage 4: ibl::shadeSurface in linear light, then sRGB-encoded (clamped).
+// Stage 4: ibl::shadeSurface in linear light, then through the camera's
+// response (camera_response.glsl: its transfer, and its noise when matched).
 // The reflection term reads the ladder mirror, glossy 0..L-1, diffuse
 // (src/ibl/surface_shading.hpp) between the two rungs nearest to the
 // material's glossiness. Which two is fixed when the program is built:
@@ -11,6 +12,8 @@
 // time halved this pass there. Samplers of rungs not read are still bound
 // to a valid cube map.
 #include "color_transfer.glsl"
+#include "camera_transfer.glsl"
+#include "camera_response.glsl"
 #include "cube_storage.glsl"
 
 varying vec3 v_normal_w;
@@ -86,5 +89,5 @@ void main() {
 #endif
   vec3 color = u_ambient_rgb * u_material_ambient + u_k_diffuse * diffuse * u_albedo +
                u_k_specular * u_highlight_rgb * highlight + u_k_reflect * reflection;
-  gl_FragColor = vec4(linearToSrgb(color), 1.0);
+  gl_FragColor = vec4(cameraOutput(color), 1.0);
 }

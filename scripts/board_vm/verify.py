@@ -128,7 +128,8 @@ def camera_run_report(report, min_frames):
     timings = []
     for name, stage in sorted(stages.items()):
         runs, skipped = stage.get("runs", 0), stage.get("skipped", 0)
-        timing = f"{stage['median_ms']:.1f} ms median" if "median_ms" in stage else "no timing"
+        # A stage that only skipped has median_ms null.
+        timing = f"{stage['median_ms']:.1f} ms median" if stage.get("median_ms") is not None else "no timing"
         timings.append(f"{name} {runs} runs/{skipped} skips {timing}")
     passed = frames >= min_frames and bool(stream) and not missing
     return passed, (f"{frames} frames (>= {min_frames}), stream \"{stream}\", {camera.get('frame_upload', '?')}"

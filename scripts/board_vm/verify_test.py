@@ -173,6 +173,9 @@ class CameraReport(unittest.TestCase):
         report = {"frames": 12, "camera": {"stream": "BGR888 640x480 (stride 1920)", "frame_upload": "packed rgb upload"},
                   "stages": {name: dict(self.STAGE) for name in ("upload", "detect_pose", "render", "present")}}
         report["stages"]["probe_to_cube"] = {"runs": 0, "skipped": 12, "skip_reasons": {"no tag": 12}}
+        # As report.json writes a stage that only skipped: its timings null.
+        report["stages"]["match_noise"] = {"median_ms": None, "p95_ms": None, "runs": 0, "skipped": 12,
+                                           "skip_reasons": {"off": 12}}
         report.update(changes)
         return report
 
@@ -180,6 +183,7 @@ class CameraReport(unittest.TestCase):
         passed, detail = verify.camera_run_report(self.report(), 10)
         self.assertTrue(passed, detail)
         self.assertIn("probe_to_cube 0 runs/12 skips", detail)
+        self.assertIn("match_noise 0 runs/12 skips no timing", detail)
 
     def test_too_few_frames_no_stream_or_an_untimed_stage_fail(self):
         self.assertFalse(verify.camera_run_report(self.report(frames=3), 10)[0])

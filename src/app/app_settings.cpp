@@ -209,6 +209,13 @@ AppSettings loadAppSettings(const std::string& path) {
       refinement.readDouble("weight", settings.probe_refinement.weight, Range::openClosed(0.0, 1.0));
   refinement.rejectUnknownFields();
 
+  ConfigReader camera_match = file.section("camera_match");
+  settings.camera_match.noise = camera_match.readBool("noise", settings.camera_match.noise);
+  settings.camera_match.noise_smoothing_new_weight =
+      camera_match.readDouble("noise_smoothing_new_weight", settings.camera_match.noise_smoothing_new_weight,
+                              Range::openClosed(0.0, 1.0));
+  camera_match.rejectUnknownFields();
+
   ConfigReader sim = file.section("sim");
   settings.sim.env = sim.readString("env", settings.sim.env);
   settings.sim.camera_path = sim.readString("camera_path", settings.sim.camera_path);

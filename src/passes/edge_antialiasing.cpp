@@ -180,6 +180,7 @@ bool EdgeLayer::init(const gles::Capabilities& capabilities, const EdgeAntialias
   const std::string defines = "#define GRID " + std::to_string(choice.grid) + "\n";
   program_ = gles::Program::fromEmbedded("model_edges_composite.vert", "model_edges_composite.frag", defines, error);
   if (!program_) return false;
+  noise_program_.reset();
   if (!quad_.init(error)) return false;
   return gles::checkGl("EdgeLayer::init", error);
 }
@@ -213,7 +214,18 @@ void EdgeLayer::restore() {
     glDisable(GL_SCISSOR_TEST);
 }
 
-bool EdgeLayer::composite(std::string& error) {
+bool EdgeLayer::composite(std::string& error, const SensorNoiseMatch* noise, const SensorNoiseTexture* texture) {
+  const bool add_noise = noise != nullptr && texture != nullptr && texture->valid() && addsNoiseAfterResolve();
+  if (add_noise && !noise_program_) {
+    noise_program_ = gles::Program::fromEmbedded(
+        "model_edges_composite.vert", "model_edges_composite.frag",
+        "#define GRID " + std::to_string(choice_.grid) + "\n" + cameraResponseDefines({}, true), error);
+    if (!noise_program_) {
+      restore();
+      return false;
+    }
+  }
+  const gles::Program& program = add_noise ? *noise_program_ : *program_;
   restore();
   // The frame's viewport covers the frame one to one (the renderer's contract).
   glEnable(GL_SCISSOR_TEST);
@@ -223,15 +235,21 @@ bool EdgeLayer::composite(std::string& error) {
   glDisable(GL_CULL_FACE);
   glEnable(GL_BLEND);
   glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
-  program_->use();
+  program.use();
+  if (add_noise) setCameraResponseUniforms(program, {}, noise, *texture, 1);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, layer_.id());
-  glUniform1i(program_->uniform("u_layer"), 0);
-  glUniform2f(program_->uniform("u_layer_texel"), 1.0f / static_cast<float>(width_px_ * choice_.grid),
+  glUniform1i(program.uniform("u_layer"), 0);
+  glUniform2f(program.uniform("u_layer_texel"), 1.0f / static_cast<float>(width_px_ * choice_.grid),
               1.0f / static_cast<float>(height_px_ * choice_.grid));
-  quad_.draw(program_->attribute("a_position"));
+  quad_.draw(program.attribute("a_position"));
   glDisable(GL_BLEND);
   glBindTexture(GL_TEXTURE_2D, 0);
+  if (add_noise) {
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    glActiveTexture(GL_TEXTURE0);
+  }
   glScissor(saved_scissor_box_[0], saved_scissor_box_[1], saved_scissor_box_[2], saved_scissor_box_[3]);
   if (!saved_scissor_test_) glDisable(GL_SCISSOR_TEST);
   return gles::checkGl("EdgeLayer::composite", error);

@@ -39,6 +39,7 @@
 #include "core/types.hpp"
 #include "gles/capabilities.hpp"
 #include "gles/gl_objects.hpp"
+#include "passes/camera_response.hpp"
 
 namespace probelight::passes {
 
@@ -131,7 +132,13 @@ class EdgeLayer {
   // Restores the caller's state and blends the resolved layer over the
   // region of its framebuffer (whose viewport covers the frame):
   // out = layer + (1 - layer.a) dst. Leaves blending and the depth test off.
-  bool composite(std::string& error);
+  // With `noise`, a supersampled layer (addsNoiseAfterResolve) gets it here
+  // (model_edges_composite.frag says why); `texture` holds its samples.
+  bool composite(std::string& error, const SensorNoiseMatch* noise = nullptr,
+                 const SensorNoiseTexture* texture = nullptr);
+  // Whether the frame's noise goes in at the resolve (the ordered grids,
+  // whose box filter would average it down) rather than in the model's shader.
+  bool addsNoiseAfterResolve() const { return choice_.grid >= 2; }
   // Restores what begin() saved without compositing (a draw that failed).
   void restore();
 
@@ -148,6 +155,7 @@ class EdgeLayer {
   gles::Renderbuffer depth_;
   gles::Framebuffer framebuffer_;
   std::optional<gles::Program> program_;
+  std::optional<gles::Program> noise_program_;  // program_ with MATCH_SENSOR_NOISE, made on first use
   gles::FullScreenQuad quad_;
   std::uint64_t bytes_ = 0;
   int samples_ = 1;

@@ -176,7 +176,7 @@ bool ModelRenderer::init(const gles::Capabilities& capabilities, CubeStorage sto
   // Every piece's program with the mirror-only ladder now, so a shader that
   // does not build fails here, not mid-run.
   for (const Piece& piece : pieces_)
-    if (programFor(piece, 0, 0, 0, 0, 0, false, false, error) == nullptr) return false;
+    if (programFor(piece, 0, 0, 0, 0, 0, false, false, false, error) == nullptr) return false;
   stats_.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return gles::checkGl("ModelRenderer::init", error);
 }
@@ -360,8 +360,10 @@ bool ModelRenderer::uploadPrimitive(const model::Primitive& source, std::size_t 
 
 const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
                                                int self_shadow_lights, int self_shadow_floor, bool floor_shadow,
-                                               bool floor_camera, std::string& error) {
-  std::string defines = cubeStorageDefines(storage_) + piece.defines + "#define GLOSSY_LEVELS " +
+                                               bool floor_camera, bool noise_in_shader, std::string& error) {
+  std::string defines = cubeStorageDefines(storage_) +
+                        cameraResponseDefines(settings_.camera_transfer, noise_in_shader) + piece.defines +
+                        "#define GLOSSY_LEVELS " +
                         std::to_string(glossy_levels) + "\n#define RUNG_FIRST " + std::to_string(rung_first) +
                         "\n#define RUNG_LAST " + std::to_string(rung_last) + "\n";
   if (self_shadow_lights > 0) {
@@ -375,10 +377,6 @@ const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_firs
     if (floor_shadow) defines += "#define NEAR_FLOOR_SHADOW\n";
     if (floor_camera) {
       defines += "#define NEAR_FLOOR_CAMERA\n#define CAMERA_FLOOR_MARGIN_PX " + std::to_string(ibl::kCameraFloorMarginPx) + "\n";
-      if (near_floor_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma)
-        defines += "#define CAMERA_TRANSFER_GAMMA\n";
-      else if (near_floor_.camera_transfer.curve == ibl::CameraTransfer::Curve::kLinear)
-        defines += "#define CAMERA_TRANSFER_LINEAR\n";
     }
   }
   if (auto found = programs_.find(defines); found != programs_.end()) return &found->second;
@@ -445,6 +443,7 @@ bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld&
     error = "ModelRenderer: initialised for a different cube map storage than these EnvironmentMaps use";
     return false;
   }
+  if (sensor_noise_ != nullptr && !noise_texture_.valid() && !noise_texture_.init(error)) return false;
   const int glossy_levels = environment.glossyWritten() ? std::clamp(environment.glossyLevels(), 0, 2) : 0;
   std::vector<double> exponents;
   for (int level = 0; level < glossy_levels; ++level)
@@ -505,7 +504,7 @@ bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld&
   glDepthMask(GL_TRUE);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
-  if (layered && !edge_layer_.composite(error)) return false;
+  if (layered && !edge_layer_.composite(error, sensor_noise_, &noise_texture_)) return false;
   glActiveTexture(GL_TEXTURE0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
@@ -556,10 +555,18 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
   const int glossy_levels = static_cast<int>(rung_alphas.size()) - 2;
   // Self-shadow lights: what the units left (diffuse, the rungs, the BRDF
   // table and the textures come first) and the fragment uniforms allow
-  // (6 vectors a light; the rest of the shader uses under 48).
+  // (6 vectors a light; the rest of the shader uses under 48, and the
+  // frame's noise 5 more).
   int units_used = 2;  // the diffuse map and the BRDF table
   for (int rung = range.first; rung <= range.last; ++rung) units_used += rung < glossy_levels + 1 ? 1 : 0;
   for (bool used : piece.slot_used) units_used += used ? 1 : 0;
+  // The frame's noise, before the self-shadow lights: it is the whole
+  // model's grain, against one of eight lights' shadows.
+  const bool noise_in_shader = sensor_noise_ != nullptr && noise_texture_.valid() &&
+                               !(stats_.edges.usesLayer() && edge_layer_.addsNoiseAfterResolve()) &&
+                               units_used < capabilities_.max_fragment_texture_units;
+  units_used += noise_in_shader ? 1 : 0;
+  const int base_uniform_vectors = 48 + (noise_in_shader ? 5 : 0);
   // The floor's shadow and the camera's view of it in the reflections
   // before the self-shadow lights: a unit each, against one of eight lights.
   const bool floor_shadow = near_floor_.enabled && near_floor_.shadow != nullptr && near_floor_.shadow->hasShadow() &&
@@ -576,7 +583,7 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
       self_shadow_floor_ != nullptr && !self_shadow_floor_->empty()) {
     const int wanted = static_cast<int>(self_shadow_floor_->size());
     if (units_used + wanted < capabilities_.max_fragment_texture_units &&
-        48 + 5 * wanted + 6 <= capabilities_.max_fragment_uniform_vectors)
+        base_uniform_vectors + 5 * wanted + 6 <= capabilities_.max_fragment_uniform_vectors)
       self_shadow_floor = wanted;
   }
   units_used += self_shadow_floor;
@@ -584,12 +591,12 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
   if (self_shadow_ != nullptr && self_shadow_map_size_px_ > 0)
     self_shadow_lights = std::max(0, std::min({static_cast<int>(self_shadow_->size()),
                                                capabilities_.max_fragment_texture_units - units_used,
-                                               (capabilities_.max_fragment_uniform_vectors - 48 -
+                                               (capabilities_.max_fragment_uniform_vectors - base_uniform_vectors -
                                                 5 * self_shadow_floor) / 6}));
   self_shadow_lights_read_ = self_shadow_lights;
   const gles::Program* found =
       programFor(piece, range.first, range.last, glossy_levels, self_shadow_lights,
-                 self_shadow_lights > 0 ? self_shadow_floor : 0, floor_shadow, floor_camera, error);
+                 self_shadow_lights > 0 ? self_shadow_floor : 0, floor_shadow, floor_camera, noise_in_shader, error);
   if (found == nullptr) return false;
   const gles::Program& program = *found;
   program.use();
@@ -608,6 +615,9 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
   glBindTexture(GL_TEXTURE_2D, brdf_table_.id());
   glUniform1i(program.uniform("u_brdf_table"), unit++);
   glUniform1f(program.uniform("u_brdf_table_size"), static_cast<float>(brdf_table_size_));
+  setCameraResponseUniforms(program, settings_.camera_transfer, noise_in_shader ? sensor_noise_ : nullptr,
+                            noise_texture_, unit);
+  unit += noise_in_shader ? 1 : 0;
   for (int slot = 0; slot < kSlotCount; ++slot) {
     if (!piece.slot_used[static_cast<size_t>(slot)]) continue;
     const std::string prefix = kSlotUniforms[slot];
@@ -650,8 +660,6 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
       glUniform2f(program.uniform("u_floor_image_size_px"), static_cast<float>(camera.width_px),
                   static_cast<float>(camera.height_px));
       glUniform1f(program.uniform("u_floor_reach2"), static_cast<float>(ibl::cameraFloorReach2(camera)));
-      if (near_floor_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma)
-        glUniform1f(program.uniform("u_camera_gamma"), static_cast<float>(near_floor_.camera_transfer.gamma));
     }
     if (floor_shadow) {
       const ibl::GroundRegion& region = near_floor_.shadow->region();

@@ -48,6 +48,7 @@
 #include "passes/edge_antialiasing.hpp"
 #include "ibl/color_transfer.hpp"
 #include "passes/camera_frame_texture.hpp"
+#include "passes/camera_response.hpp"
 #include "passes/environment_maps.hpp"
 #include "passes/ground_shadow.hpp"
 
@@ -70,6 +71,10 @@ struct ModelRendererSettings {
   // a bare ModelRenderer blends exactly as a direct draw (through the 8-bit
   // layer a blended material's colour is rounded once more, 0.5 code).
   int edge_samples = 1;
+  // How the frame's bytes encode light: the model leaves in that encoding
+  // (camera_response.glsl), and the frame's floor in its reflections is
+  // decoded through it.
+  ibl::CameraTransfer camera_transfer;
 };
 
 // What stages/compose_stage (probelight run, render) asks for.
@@ -125,10 +130,14 @@ class ModelRenderer {
     glm::dvec3 ball_centre_w{0.0};  // the ball the maps were made from (seen by draw()'s camera)
     double ball_radius_m = 0.0;
     const GroundShadow* shadow = nullptr;             // null, or without a shadow: not darkened
-    const CameraFrameTexture* camera_frame = nullptr;  // null: the maps alone
-    ibl::CameraTransfer camera_transfer;               // how the frame's bytes decode to light
+    const CameraFrameTexture* camera_frame = nullptr;  // null: the maps alone (decoded with settings' camera_transfer)
   };
   void setNearFloor(const NearFloor& near_floor);
+
+  // Noise matched to the frame's for the draws from now on; null: none. It
+  // must outlive them. In the model's shader, or at the resolve of a
+  // supersampled edge layer (EdgeLayer::addsNoiseAfterResolve).
+  void setSensorNoise(const SensorNoiseMatch* noise) { sensor_noise_ = noise; }
 
   // Chooses the edge anti-aliasing for frames of width_px x height_px drawn
   // into a framebuffer with target_samples (GL_SAMPLES; 0 single-sampled)
@@ -170,7 +179,7 @@ class ModelRenderer {
   const gles::Texture* textureFor(const model::MeshModel& model, const model::TextureSlot& slot, std::string& error);
   const gles::Program* programFor(const Piece& piece, int rung_first, int rung_last, int glossy_levels,
                                   int self_shadow_lights, int self_shadow_floor, bool floor_shadow, bool floor_camera,
-                                  std::string& error);
+                                  bool noise_in_shader, std::string& error);
   // A set of self-shadow lights' maps and uniforms (`prefix`_map, _row0..2,
   // _direction, _rgb, _texel), from texture unit `unit` on (advanced).
   void bindSelfShadowLights(const gles::Program& program, const std::string& prefix,
@@ -194,6 +203,8 @@ class ModelRenderer {
   bool self_shadow_packed_ = false;
   int self_shadow_lights_read_ = 0;
   NearFloor near_floor_;
+  const SensorNoiseMatch* sensor_noise_ = nullptr;
+  SensorNoiseTexture noise_texture_;  // made on the first draw with noise
   ModelUploadStats stats_;
   std::vector<std::string> warnings_;
   // What chooseEdgeAntialiasing said for the frame size below (the layer may

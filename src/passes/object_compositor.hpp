@@ -20,6 +20,7 @@
 #include "ibl/ground_shadow.hpp"
 #include "ibl/surface_shading.hpp"
 #include "passes/camera_frame_texture.hpp"
+#include "passes/camera_response.hpp"
 #include "passes/environment_maps.hpp"
 
 namespace probelight::passes {
@@ -46,6 +47,9 @@ struct ObjectCompositorSettings {
   double max_silhouette_sag_px = 0.25;
   double near_m = 0.01;
   double far_m = 50.0;
+  // How the frame's bytes encode light: the object leaves in the same
+  // encoding (camera_response.glsl).
+  ibl::CameraTransfer camera_transfer;
 };
 
 class ObjectCompositor {
@@ -77,6 +81,10 @@ class ObjectCompositor {
                       const std::vector<MeshVertex>& triangles, const ibl::SurfaceMaterial& material,
                       const ibl::SceneLighting& lighting, EnvironmentMaps& environment, std::string& error);
 
+  // Noise matched to the frame's for the objects drawn from now on; null:
+  // none. Kept by pointer: it must outlive those draws.
+  void setSensorNoise(const SensorNoiseMatch* noise) { sensor_noise_ = noise; }
+
   // Blends straight-alpha RGBA (top row first, sRGB bytes) over the whole viewport.
   bool drawOverlayRGBA(const std::uint8_t* rgba, int width, int height, std::string& error);
 
@@ -89,14 +97,17 @@ class ObjectCompositor {
                                       const ibl::SurfaceMaterial& material, const ibl::SceneLighting& lighting,
                                       EnvironmentMaps& environment, std::string& error);
 
-  // The shading program for a shape and the ladder's rungs
-  // (reflectionRungsFor), built on first use and kept.
-  const gles::Program* shadingProgram(ObjectShape shape, const ReflectionRungs& rungs, std::string& error);
+  // The shading program for a shape, the ladder's rungs
+  // (reflectionRungsFor) and whether it adds noise, built on first use and kept.
+  const gles::Program* shadingProgram(ObjectShape shape, const ReflectionRungs& rungs, bool match_noise,
+                                      std::string& error);
 
   ObjectCompositorSettings settings_;
   CubeStorage storage_ = CubeStorage::kSrgb8;
   gles::Program image_program_;
-  std::map<std::tuple<ObjectShape, int, int>, gles::Program> shading_programs_;
+  std::map<std::tuple<ObjectShape, int, int, bool>, gles::Program> shading_programs_;
+  const SensorNoiseMatch* sensor_noise_ = nullptr;
+  SensorNoiseTexture noise_texture_;  // made on the first frame with noise
   gles::Buffer mesh_vertices_;
   gles::FullScreenQuad quad_;
   struct SphereMesh {

@@ -52,11 +52,14 @@ ComposeStage::ComposeStage(const SceneObject& object, const CameraIntrinsics& ca
 
 Status ComposeStage::init(const gles::Capabilities& capabilities, passes::CubeStorage storage) {
   std::string error;
-  if (!compositor_.init(capabilities, passes::ObjectCompositorSettings{}, storage, error))
+  passes::ObjectCompositorSettings compositor_settings;
+  compositor_settings.camera_transfer = camera_transfer_;
+  if (!compositor_.init(capabilities, compositor_settings, storage, error))
     return Status::runtimeFailure("GPU set-up failed: " + error);
   if (object_.isModel()) {
     passes::ModelRendererSettings settings;
     settings.edge_samples = passes::kKioskEdgeSamples;
+    settings.camera_transfer = camera_transfer_;
     if (!model_renderer_.init(capabilities, storage, *object_.model, object_.world_from_model, settings, error))
       return Status::runtimeFailure("GPU set-up failed for " + object_.model->source + ": " + error);
     // Every display draws the frame into a single-sampled FBO (display/):
@@ -104,7 +107,6 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
       near_floor.ball_radius_m = rig_.probe_radius_m;
       near_floor.shadow = shadows.enabled() ? &shadows.pass() : nullptr;
       near_floor.camera_frame = &frame;
-      near_floor.camera_transfer = camera_transfer_;
       model_renderer_.setNearFloor(near_floor);
     }
     const bool drawn =

@@ -54,6 +54,12 @@ class ComposeStage {
   // tag, nor before the first maps: the object would be black).
   Status draw(const tracking::TagTrackResult& track, const std::string& status, const passes::CameraFrameTexture& frame,
               MapsStage& maps, ShadowsStage& shadows, const ibl::SceneLighting& lighting);
+  // Noise matched to the frame's (stages/noise_match_stage.hpp) for the
+  // object drawn from now on; null: none. It must outlive the draws.
+  void setSensorNoise(const passes::SensorNoiseMatch* noise) {
+    compositor_.setSensorNoise(noise);
+    model_renderer_.setSensorNoise(noise);
+  }
   // The display still holds what was drawn last: shown again, not drawn.
   void skip(const std::string& reason) { report_.recordStageSkip(kStageName, reason); }
 

@@ -140,6 +140,19 @@ struct StateConfig {
   std::string dir;  // empty: nothing is kept (the desktop default; the board uses /var/lib/probelight)
 };
 
+// The virtual object passed through what the frame went through
+// (issue 19): for now its noise, measured on the tag's cells each frame
+// (ibl/sensor_noise.hpp) and added to the object's pixels only
+// (stages/noise_match_stage.hpp).
+struct CameraMatchConfig {
+  bool noise = false;
+  // Each frame's measurement moves the kept one this far toward it: the
+  // estimate's own scatter (about 2% of sigma a frame) falls by
+  // sqrt(weight / (2 - weight)), to 1% at 0.3, and a change of sensor gain
+  // is followed within a few frames.
+  double noise_smoothing_new_weight = 0.3;
+};
+
 struct PipelineSettings {
   EnvironmentMapConfig maps;
   TrackingConfig tracking;
@@ -150,6 +163,7 @@ struct PipelineSettings {
   LightsConfig lights;
   StateConfig state;
   CameraConfig camera;
+  CameraMatchConfig camera_match;
   bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)
 };
 

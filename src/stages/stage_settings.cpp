@@ -80,4 +80,12 @@ std::optional<ibl::WhiteRing> tagWhiteRingOf(const RigGeometry& rig) {
   return ibl::tagWhiteRing(family->width_at_border, family->reversed_border, rig.tag_size_m);
 }
 
+std::optional<ibl::TagCellGrid> tagCellGridOf(const RigGeometry& rig) {
+  const AprilTagFamilyHandle family = createAprilTagFamily(rig.tag_family);
+  if (!family) return std::nullopt;
+  const ibl::TagCellGrid grid = ibl::tagCellGrid(family->width_at_border, family->total_width, rig.tag_size_m);
+  if (grid.grid_cells <= 0) return std::nullopt;
+  return grid;
+}
+
 }  // namespace probelight

@@ -10,6 +10,7 @@
 #include "stages/pipeline_settings.hpp"
 #include "core/types.hpp"
 #include "ibl/lighting_fit.hpp"
+#include "ibl/sensor_noise.hpp"
 #include "ibl/surface_shading.hpp"
 #include "passes/environment_maps.hpp"
 #include "passes/ground_shadow.hpp"
@@ -43,6 +44,8 @@ passes::GroundShadowSettings groundShadowSettings(const PipelineSettings& settin
 // size), where the lighting fit reads the light on the ground; none for a
 // family libapriltag does not know (rig.yaml's reader refuses those).
 std::optional<ibl::WhiteRing> tagWhiteRingOf(const RigGeometry& rig);
+// The printed tag's cells, where the frame's noise is measured.
+std::optional<ibl::TagCellGrid> tagCellGridOf(const RigGeometry& rig);
 
 // The `lights` section's fit settings, with the camera's transfer (the
 // border and the post are read in camera codes).

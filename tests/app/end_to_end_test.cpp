@@ -971,5 +971,45 @@ TEST_F(EndToEnd, ACameraQuickerThanTheLeadGetsItsLadderAtTheFit) {
   EXPECT_EQ(report["frames"], 30);
 }
 
+// camera_match.noise: the stage measures the frame's noise on the tag each
+// frame it shows and the report says what it found; off (the default), it
+// skips every frame, saying so.
+TEST_F(EndToEnd, NoiseMatchMeasuresTheSimulatedCamerasNoiseAndShowsAsRunsAndSkips) {
+  const int frames = 12;
+  const fs::path config = dir_ / "noise.yaml";
+  // The sim's noise is 1.5 codes (its default); no shadows keep the run short.
+  std::ofstream(config) << "lights:\n  shadows: false\ncamera_match:\n  noise: true\n";
+  const fs::path out = dir_ / "noise";
+  const CommandResult result = run("run --source sim --display headless --frames " + std::to_string(frames) +
+                                   " --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  const nlohmann::json& stage = report["stages"]["match_noise"];
+  EXPECT_EQ(stage["runs"].get<int>() + stage["skipped"].get<int>(), frames);
+  // Every shown frame has the tag: only the start-up bracket's frames skip.
+  EXPECT_EQ(stage["skipped"].get<int>(), report["counters"].value("frames_in_bracket", 0));
+  EXPECT_GE(stage["runs"].get<int>(), frames / 2);
+  const nlohmann::json& noise = report["camera_match"]["noise"];
+  for (const char* level : {"dark", "bright"})
+    for (int c = 0; c < 3; ++c) {
+      // What the frame shows: the sim's 1.5 codes and its rounding; the
+      // estimate over ~1100 degrees of freedom a frame is good to ~2%.
+      const double expected = std::sqrt(1.5 * 1.5 + 1.0 / 12.0);
+      EXPECT_NEAR(noise[level]["sigma_code"][c].get<double>(), expected, 0.1 * expected) << level << " " << c;
+      EXPECT_NEAR(noise["added_sigma_code"][level][c].get<double>(), 1.5, 0.15) << level << " " << c;
+    }
+  EXPECT_LT(noise["dark"]["code"][1].get<double>() + 60.0, noise["bright"]["code"][1].get<double>());
+
+  const fs::path out_off = dir_ / "noise_off";
+  std::ofstream(config) << "lights:\n  shadows: false\n";
+  const CommandResult off = run("run --source sim --display headless --frames 4 --config " + config.string() +
+                                " --out " + out_off.string());
+  ASSERT_EQ(off.exit_status, 0) << off.stderr_text;
+  const nlohmann::json report_off = readReport(out_off);
+  EXPECT_EQ(report_off["stages"]["match_noise"]["runs"], 0);
+  EXPECT_EQ(report_off["stages"]["match_noise"]["skip_reasons"]["off"], 4);
+  EXPECT_FALSE(report_off.contains("camera_match"));
+}
+
 }  // namespace
 }  // namespace probelight

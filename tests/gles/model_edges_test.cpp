@@ -33,6 +33,7 @@
 
 #include "gles/render_target.hpp"
 #include "gles_test_support.hpp"
+#include "glowing_box.hpp"
 #include "ibl/color_transfer.hpp"
 #include "passes/edge_antialiasing.hpp"
 #include "passes/environment_maps.hpp"
@@ -48,46 +49,6 @@ constexpr std::uint8_t kBackground = 40;
 // The box's glow, linear: sRGB bytes about (243, 188, 108), so the steps to
 // the background are about 203, 148 and 68 codes.
 const glm::vec3 kEmissive(0.9f, 0.5f, 0.15f);
-
-// A 6 cm box on the tag, turned 27 degrees about the vertical: seen from
-// above at an angle its outline is a hexagon, six edges at six angles.
-model::MeshModel glowingBox() {
-  model::MeshModel box;
-  model::Primitive p;
-  const float h = 0.03f;
-  const glm::vec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  for (int axis = 0; axis < 3; ++axis)
-    for (float side : {-1.0f, 1.0f}) {
-      const glm::vec3 n = side * axes[axis], u = axes[(axis + 1) % 3], v = axes[(axis + 2) % 3];
-      const auto base = static_cast<std::uint32_t>(p.positions_m.size());
-      for (const auto& [a, b] : {std::pair{-1.0f, -1.0f}, {1.0f, -1.0f}, {1.0f, 1.0f}, {-1.0f, 1.0f}}) {
-        p.positions_m.push_back(h * (n + a * u + b * v));
-        p.normals.push_back(n);
-      }
-      p.indices.insert(p.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
-    }
-  p.material = 0;
-  box.primitives.push_back(p);
-  model::Material glow;
-  glow.name = "glow";
-  glow.base_color_factor = {0.0f, 0.0f, 0.0f, 1.0f};
-  glow.metallic_factor = 1.0f;  // F0 = base colour = 0: no specular either
-  glow.emissive_factor = kEmissive;
-  glow.double_sided = true;     // the winding then cannot matter: the outline is the test
-  box.materials.push_back(glow);
-  box.min_m = glm::vec3(-h);
-  box.max_m = glm::vec3(h);
-  return box;
-}
-
-glm::dmat4 boxPlacement() {
-  const double turn = 27.0 * 3.14159265358979 / 180.0;
-  glm::dmat4 world(1.0);
-  world[0] = {std::cos(turn), std::sin(turn), 0.0, 0.0};
-  world[1] = {-std::sin(turn), std::cos(turn), 0.0, 0.0};
-  world[3] = {0.0, 0.0, 0.03, 1.0};
-  return world;
-}
 
 // The camera at `scale` times the resolution: the same rays through the
 // pixel centres' grid, finer (the renderer maps pixel p to NDC by p + 0.5).
@@ -106,7 +67,7 @@ struct EdgeScene {
   CameraIntrinsics camera = test::testCamera();
   PoseCamFromWorld pose = test::lookAt({0.09, -0.25, 0.19}, {0.0, 0.0, 0.03});
   passes::EnvironmentMaps maps;
-  model::MeshModel box = glowingBox();
+  model::MeshModel box = test::glowingBox(kEmissive);
 };
 
 void initScene(EdgeScene& scene, const gles::Capabilities& caps) {
@@ -125,7 +86,7 @@ bool renderBox(EdgeScene& scene, const gles::Capabilities& caps, const CameraInt
                std::string& error) {
   passes::ModelRendererSettings settings;
   settings.edge_samples = edge_samples;
-  if (!renderer.init(caps, scene.maps.storage(), scene.box, boxPlacement(), settings, error)) return false;
+  if (!renderer.init(caps, scene.maps.storage(), scene.box, test::glowingBoxPlacement(), settings, error)) return false;
   target.bind();
   glClearColor(kBackground / 255.0f, kBackground / 255.0f, kBackground / 255.0f, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -381,7 +342,7 @@ TEST_F(GpuTest, ModelEdgesApproachASupersampledReference) {
       passes::ModelRendererSettings settings;
       settings.edge_samples = 4;
       passes::ModelRenderer renderer;
-      ASSERT_TRUE(renderer.init(caps, scene.maps.storage(), scene.box, boxPlacement(), settings, error)) << error;
+      ASSERT_TRUE(renderer.init(caps, scene.maps.storage(), scene.box, test::glowingBoxPlacement(), settings, error)) << error;
       msaa.bind();
       glClearColor(kBackground / 255.0f, kBackground / 255.0f, kBackground / 255.0f, 1.0f);
       glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -399,7 +360,7 @@ TEST_F(GpuTest, ModelEdgesApproachASupersampledReference) {
       row.error = measureEdges(image, covered, box_color);
       glBindFramebuffer(GL_FRAMEBUFFER, 0);
       passes::ModelRenderer timed;
-      ASSERT_TRUE(timed.init(caps, scene.maps.storage(), scene.box, boxPlacement(), settings, error)) << error;
+      ASSERT_TRUE(timed.init(caps, scene.maps.storage(), scene.box, test::glowingBoxPlacement(), settings, error)) << error;
       msaa.bind();
       glFinish();
       const auto start = std::chrono::steady_clock::now();
