@@ -42,6 +42,8 @@
 #include "ibl/probe_observation.hpp"
 #include "ibl/probe_outline.hpp"
 #include "ibl/probe_to_cube.hpp"
+#include "ibl/sensor_noise.hpp"
+#include "stages/stage_settings.hpp"
 #include "stages/probe_merge.hpp"
 #include "ibl/ground_shadow.hpp"
 #include "ibl/hdr_bracket.hpp"
@@ -801,7 +803,9 @@ struct RenderRig {
   }
 };
 
-void renderFrame(benchmark::State& state) {
+// With `match_noise`, the frame's noise added to the sphere (the compose
+// stage with camera_match.noise): its cost is the difference.
+void renderFrame(benchmark::State& state, bool match_noise) {
   if (!requireGl(state)) return;
   RenderRig rig;
   std::string error;
@@ -809,13 +813,63 @@ void renderFrame(benchmark::State& state) {
     state.SkipWithError(error.c_str());
     return;
   }
+  passes::SensorNoiseMatch match;
+  match.model.dark_code = glm::dvec3(40.0);
+  match.model.bright_code = glm::dvec3(190.0);
+  match.model.dark_sigma_code = match.model.bright_sigma_code = glm::dvec3(1.5);
+  if (match_noise) rig.compositor.setSensorNoise(&match);
   for (auto _ : state) {
+    ++match.frame_index;
     if (!rig.draw(error)) {
       state.SkipWithError(error.c_str());
       break;
     }
     glFinish();
   }
+}
+
+// The frame's noise measured on the tag's cells (ibl::measureSensorNoise,
+// the match_noise stage's work), over the four frames at their true pose;
+// the error is the added sigma's against the simulator's own (its
+// noise_sigma_code), green, both inks, averaged over the frames.
+void matchNoiseMeasure(benchmark::State& state) {
+  Setup& s = setup();
+  const std::optional<ibl::TagCellGrid> grid = tagCellGridOf(s.scene.rig);
+  if (!grid) {
+    state.SkipWithError("no tag grid");
+    return;
+  }
+  auto measure = [&](const Frame& frame) {
+    return ibl::measureSensorNoise(
+        s.scene.camera, frame.truth.pose, *grid,
+        [&frame](int x, int y) {
+          const std::uint8_t* p = frame.rgb.row(y) + 3 * x;
+          return glm::u8vec3(p[0], p[1], p[2]);
+        },
+        ibl::SensorNoiseSettings{});
+  };
+  const ErrorRow& row = errorsFor("match_noise/measure", [&] {
+    double error_sum = 0.0;
+    int measured = 0;
+    for (const Frame& frame : s.frames) {
+      const ibl::SensorNoiseReading reading = measure(frame);
+      if (reading.status != ibl::SensorNoiseStatus::kMeasured) continue;
+      const ibl::AddedNoiseModel model = ibl::addedNoiseModel(reading.dark, reading.bright);
+      for (double sigma : {model.dark_sigma_code.y, model.bright_sigma_code.y})
+        error_sum += std::abs(sigma - s.scene.noise_sigma_code) / s.scene.noise_sigma_code;
+      ++measured;
+    }
+    ErrorRow out;
+    out.values = {{"sigma_err_pct", measured > 0 ? 100.0 * error_sum / (2.0 * measured) : -1.0},
+                  {"measured_pct", 100.0 * measured / static_cast<double>(s.frames.size())}};
+    return out;
+  });
+  size_t next = 0;
+  for (auto _ : state) {
+    const ibl::SensorNoiseReading reading = measure(s.frames[next++ % s.frames.size()]);
+    benchmark::DoNotOptimize(reading.bright.sigma_code);
+  }
+  setCounters(state, row);
 }
 
 void presentReadback(benchmark::State& state) {
@@ -1369,7 +1423,15 @@ void registerAll() {
         ->UseRealTime()
         ->MinTime(kMinTime);
   benchmark::RegisterBenchmark("shadow_composite/640x480", shadowComposite)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
-  benchmark::RegisterBenchmark("render/640x480", renderFrame)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("render/640x480", [](benchmark::State& state) { renderFrame(state, false); })
+      ->Unit(kMillisecond)
+      ->UseRealTime()
+      ->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("render/640x480/match_noise", [](benchmark::State& state) { renderFrame(state, true); })
+      ->Unit(kMillisecond)
+      ->UseRealTime()
+      ->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("match_noise/measure", matchNoiseMeasure)->Unit(kMillisecond)->MinTime(kMinTime);
   benchmark::RegisterBenchmark("present_readback/640x480", presentReadback)
       ->Unit(kMillisecond)
       ->UseRealTime()

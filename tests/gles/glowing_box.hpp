@@ -4,13 +4,17 @@
 // shading.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <utility>
 
 #include <glm/glm.hpp>
 
+#include "ibl/cube_map.hpp"
 #include "model/mesh_model.hpp"
+#include "passes/environment_maps.hpp"
 
 namespace probelight::test {
 
@@ -52,6 +56,15 @@ inline glm::dmat4 glowingBoxPlacement() {
   world[1] = {-std::sin(turn), std::cos(turn), 0.0, 0.0};
   world[3] = {0.0, 0.0, 0.03, 1.0};
   return world;
+}
+
+// Black surroundings (reflection and diffuse maps): the box's colour is its
+// emissive alone. False with the reason in `error`.
+inline bool initBlackMaps(passes::EnvironmentMaps& maps, const gles::Capabilities& caps, std::string& error) {
+  if (!maps.init(caps, {}, error)) return false;
+  ibl::CubeMapRGB black(maps.settings().reflection_face_size);
+  for (auto& face : black.faces) std::fill(face.begin(), face.end(), glm::vec3(0.0f));
+  return maps.setReflection(black, error) && maps.updateDiffuse(error);
 }
 
 }  // namespace probelight::test

@@ -72,12 +72,7 @@ struct EdgeScene {
 
 void initScene(EdgeScene& scene, const gles::Capabilities& caps) {
   std::string error;
-  ASSERT_TRUE(scene.maps.init(caps, {}, error)) << error;
-  // Black surroundings: the box's colour is its emissive alone.
-  ibl::CubeMapRGB black(scene.maps.settings().reflection_face_size);
-  for (auto& face : black.faces) std::fill(face.begin(), face.end(), glm::vec3(0.0f));
-  ASSERT_TRUE(scene.maps.setReflection(black, error)) << error;
-  ASSERT_TRUE(scene.maps.updateDiffuse(error)) << error;
+  ASSERT_TRUE(test::initBlackMaps(scene.maps, caps, error)) << error;
 }
 
 // Clears `target` to the background and draws the box with `edge_samples`.

@@ -243,11 +243,7 @@ TEST_P(NoiseMatchedModel, ScattersAsTheNoiseModelSaysWhateverTheEdgeStrategy) {
   const gles::Capabilities& caps = test::sharedCapabilities();
   std::string error;
   passes::EnvironmentMaps maps;
-  ASSERT_TRUE(maps.init(caps, {}, error)) << error;
-  ibl::CubeMapRGB black(maps.settings().reflection_face_size);
-  for (auto& face : black.faces) std::fill(face.begin(), face.end(), glm::vec3(0.0f));
-  ASSERT_TRUE(maps.setReflection(black, error)) << error;
-  ASSERT_TRUE(maps.updateDiffuse(error)) << error;
+  ASSERT_TRUE(test::initBlackMaps(maps, caps, error)) << error;
   const CameraIntrinsics camera = test::testCamera();
   const PoseCamFromWorld pose = test::lookAt({0.09, -0.25, 0.19}, {0.0, 0.0, 0.03});
   // Code 120 in sRGB: where the noise model gives sigma 2.
