@@ -220,6 +220,8 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.env = sim.readString("env", settings.sim.env);
   settings.sim.camera_path = sim.readString("camera_path", settings.sim.camera_path);
   settings.sim.noise_sigma = sim.readDouble("noise_sigma", settings.sim.noise_sigma, Range::closed(0.0, 64.0));
+  settings.sim.lens_blur_sigma =
+      sim.readDouble("lens_blur_sigma", settings.sim.lens_blur_sigma, Range::closed(0.0, 16.0));
   settings.sim.seed = sim.readInt("seed", settings.sim.seed, Range::atLeast(0));
   settings.sim.sun_azimuth_rate_deg_per_frame = sim.readDouble(
       "sun_azimuth_rate_deg_per_frame", settings.sim.sun_azimuth_rate_deg_per_frame, Range::closed(-90.0, 90.0));

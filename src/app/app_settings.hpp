@@ -17,6 +17,7 @@ struct SimConfig {
   std::string env = "studio";
   std::string camera_path = "orbit";
   double noise_sigma = 1.5;  // 8-bit code values
+  double lens_blur_sigma = 0.0;  // px: the simulated lens's Gaussian blur (sim::SceneConfig::lens_blur_sigma_px)
   int seed = 1;
   // Lighting that changes during the run (for testing map refresh and
   // recalibration): the environment turning, and a lamp switching.

@@ -380,6 +380,7 @@ class Kiosk {
     scene.environment = settings.sim.env;
     scene.camera_path.name = settings.sim.camera_path;
     scene.noise_sigma_code = settings.sim.noise_sigma;
+    scene.lens_blur_sigma_px = settings.sim.lens_blur_sigma;
     scene.seed = static_cast<std::uint64_t>(settings.sim.seed);
     scene.lighting.sun_azimuth_rate_deg_per_frame = settings.sim.sun_azimuth_rate_deg_per_frame;
     scene.environment_rotation_deg = settings.sim.environment_rotation_deg;

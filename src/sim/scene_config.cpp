@@ -1,5 +1,7 @@
 #include "sim/scene_config.hpp"
 
+#include <cmath>
+
 namespace probelight::sim {
 
 SceneConfig defaultScene() {
@@ -34,6 +36,31 @@ const std::vector<std::string>& environmentNames() {
 const std::vector<std::string>& cameraPathNames() {
   static const std::vector<std::string> names = {"static", "orbit", "slow_wobble", "random", "hand_held_sweep"};
   return names;
+}
+
+}  // namespace probelight::sim
+
+namespace probelight::sim {
+
+std::vector<double> lensBlurKernel(double sigma_px) {
+  if (!(sigma_px > 0.0)) return {1.0};
+  const int radius = static_cast<int>(std::ceil(4.0 * sigma_px));
+  std::vector<double> kernel(static_cast<size_t>(2 * radius + 1));
+  double sum = 0.0;
+  for (int k = -radius; k <= radius; ++k) {
+    const double w = std::exp(-0.5 * k * k / (sigma_px * sigma_px));
+    kernel[static_cast<size_t>(k + radius)] = w;
+    sum += w;
+  }
+  for (double& w : kernel) w /= sum;
+  return kernel;
+}
+
+double lensBlurKernelVariance(const std::vector<double>& kernel) {
+  const int radius = static_cast<int>(kernel.size() / 2);
+  double variance = 0.0;
+  for (int k = -radius; k <= radius; ++k) variance += static_cast<double>(k) * k * kernel[static_cast<size_t>(k + radius)];
+  return variance;
 }
 
 }  // namespace probelight::sim

@@ -91,6 +91,11 @@ struct SceneConfig {
   bool auto_exposure = true;
   double fixed_exposure = 1.0;  // used when auto_exposure is false
   double noise_sigma_code = 1.5;  // Gaussian, in 8-bit code values, added after sRGB encoding
+  // The lens's blur: a Gaussian point spread of this sigma in pixels over
+  // the camera's linear light (before clipping, as optics spread light
+  // before the sensor saturates), sampled at whole-pixel offsets
+  // (lensBlurKernel); 0: none. On top of each pixel's own area.
+  double lens_blur_sigma_px = 0.0;
   // n x n regular sub-pixel samples per pixel; 0 (needs edge samples): a
   // pixel that no edge crosses is the mean of its four corners' radiance,
   // about one ray a pixel (World's traceFrame says why that is as accurate).
@@ -109,6 +114,14 @@ struct SceneConfig {
 // 0.10 m; a 0.03 m ball at (0.12, 0, 0.08) on a post; sun_sky; a slow orbit at
 // 0.6 m and 40 deg elevation (ball radius ~30 px).
 SceneConfig defaultScene();
+
+// The lens blur's 1-D weights for offsets -radius..radius (radius
+// ceil(4 sigma)): the Gaussian sampled at whole pixels, normalised to a
+// sum of 1; applied along rows, then columns. Its variance,
+// sum k^2 w_k, is the blur the frame holds besides the pixel's area (a
+// sampled Gaussian of sigma 0.5 has 0.215, not 0.25).
+std::vector<double> lensBlurKernel(double sigma_px);
+double lensBlurKernelVariance(const std::vector<double>& kernel);
 
 // Names accepted for SceneConfig::environment (besides file paths) and for
 // CameraPathConfig::name, for the app's --env / --path choices.

@@ -1519,19 +1519,73 @@ struct World::Impl {
     // Each exposure of a bracket has noise of its own, as a sensor's frames do.
     if (exposure_ev != 0.0) frame_salt = splitMix64(frame_salt + static_cast<std::uint64_t>(std::llround(exposure_ev * 1024.0)));
     std::uint8_t* pixels = out.pixels.data();
-    traceFrame(fs, window, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
+    auto sense = [&](size_t pixel, const glm::dvec3& linear) {
       // Noise is a function of (seed, frame, pixel) only, so threads and
       // render order cannot change it.
       std::uint64_t bits = splitMix64(frame_salt + pixel);
       for (int c = 0; c < 3; ++c) {
-        float code = srgb.encode(sum[c] * scale);
+        float code = srgb.encode(linear[c]);
         if (sigma > 0.0f)
           code += sigma * gaussian[(bits >> (kGaussianTableBits * c)) & (kGaussianTableSize - 1)];
         // Clamped first, so adding a half and truncating rounds to nearest
         // (lround is a library call, a tenth of a frame's time).
         pixels[pixel * 3 + c] = static_cast<std::uint8_t>(std::clamp(code, 0.0f, 255.0f) + 0.5f);
       }
+    };
+    if (!(scene.lens_blur_sigma_px > 0.0)) {
+      traceFrame(fs, window, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
+        sense(pixel, sum * scale);
+      });
+      return;
+    }
+    renderBlurred(fs, window, scale, sense);
+  }
+
+  // The lens blur (SceneConfig::lens_blur_sigma_px) over the camera's linear
+  // light, then `sense` per pixel of the window. The window is traced grown
+  // by the kernel's radius (within the frame, whose edge pixels repeat
+  // outward), so each of its pixels is what the whole frame gives it.
+  template <typename Sense>
+  void renderBlurred(const FrameState& fs, const World::PixelWindow* window, double scale, Sense sense) const {
+    const int width = scene.camera.width_px, height = scene.camera.height_px;
+    const std::vector<double> kernel = lensBlurKernel(scene.lens_blur_sigma_px);
+    const int radius = static_cast<int>(kernel.size() / 2);
+    World::PixelWindow wanted{0, 0, width, height, false};
+    if (window) wanted = *window;
+    wanted.x_begin = std::clamp(wanted.x_begin, 0, width);
+    wanted.x_end = std::clamp(wanted.x_end, wanted.x_begin, width);
+    wanted.y_begin = std::clamp(wanted.y_begin, 0, height);
+    wanted.y_end = std::clamp(wanted.y_end, wanted.y_begin, height);
+    World::PixelWindow traced = wanted;
+    traced.x_begin = std::max(0, wanted.x_begin - radius);
+    traced.x_end = std::min(width, wanted.x_end + radius);
+    traced.y_begin = std::max(0, wanted.y_begin - radius);
+    traced.y_end = std::min(height, wanted.y_end + radius);
+    std::vector<glm::dvec3> linear(static_cast<size_t>(width) * height, glm::dvec3(0.0));
+    traceFrame(fs, &traced, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
+      linear[pixel] = sum * scale;
     });
+    auto at = [&](int x, int y) -> const glm::dvec3& {
+      return linear[static_cast<size_t>(std::clamp(y, 0, height - 1)) * width + std::clamp(x, 0, width - 1)];
+    };
+    // Along rows, for the window's columns and the traced rows; then along
+    // columns for the window.
+    std::vector<glm::dvec3> rows(static_cast<size_t>(width) * height, glm::dvec3(0.0));
+    for (int y = traced.y_begin; y < traced.y_end; ++y)
+      for (int x = wanted.x_begin; x < wanted.x_end; ++x) {
+        glm::dvec3 sum(0.0);
+        for (int k = -radius; k <= radius; ++k) sum += kernel[static_cast<size_t>(k + radius)] * at(x + k, y);
+        rows[static_cast<size_t>(y) * width + x] = sum;
+      }
+    for (int y = wanted.y_begin; y < wanted.y_end; ++y)
+      for (int x = wanted.x_begin; x < wanted.x_end; ++x) {
+        glm::dvec3 sum(0.0);
+        for (int k = -radius; k <= radius; ++k) {
+          const int row = std::clamp(y + k, 0, height - 1);
+          sum += kernel[static_cast<size_t>(k + radius)] * rows[static_cast<size_t>(row) * width + x];
+        }
+        sense(static_cast<size_t>(y) * width + x, sum);
+      }
   }
 
   // Ray through distorted pixel position (x - 0.5 + u, y - 0.5 + v), u, v in
@@ -1691,6 +1745,7 @@ void validate(const SceneConfig& s) {
           "supersample_per_axis 0 (corner samples) needs edge_samples_per_axis above 0");
   require(s.edge_samples_per_axis >= 0 && s.edge_samples_per_axis <= 32, "edge_samples_per_axis must be 0..32");
   require(s.noise_sigma_code >= 0, "noise_sigma_code must not be negative");
+  require(s.lens_blur_sigma_px >= 0 && s.lens_blur_sigma_px <= 16, "lens_blur_sigma_px must be 0..16");
   require(s.render_threads >= 1, "render_threads must be at least 1");
   require(s.auto_exposure || s.fixed_exposure > 0, "fixed_exposure must be positive");
   require(s.post_radius_m >= 0 && s.post_radius_m < s.rig.probe_radius_m, "post_radius_m must be in [0, probe_radius)");
