@@ -53,6 +53,7 @@
 #include "passes/camera_frame_texture.hpp"
 #include "passes/environment_maps.hpp"
 #include "passes/ground_shadow.hpp"
+#include "passes/object_blur.hpp"
 #include "passes/object_compositor.hpp"
 #include "sim/occluder.hpp"
 #include "sim/scene_config.hpp"
@@ -787,7 +788,13 @@ struct RenderRig {
            maps.updateReflection(*frames.textures[0], s.frames[0].view, s.scene.rig.probe_reflectance, error) &&
            maps.updateDiffuse(error);
   }
-  // The app's defaults (AppSettings::object): a 35 mm sphere resting on the tag.
+  // The app's defaults (AppSettings::object): a 35 mm sphere resting on the
+  // tag; with `blur`, through it by blur_sigma_px (as the compose stage
+  // with camera_match.blur), the noise then at its composite.
+  passes::ObjectBlurLayer* blur = nullptr;
+  double blur_sigma_px = 0.0;
+  const passes::SensorNoiseMatch* blur_noise = nullptr;
+  const passes::SensorNoiseTexture* blur_noise_texture = nullptr;
   bool draw(std::string& error) {
     Setup& s = setup();
     ibl::SurfaceMaterial material;
@@ -798,14 +805,23 @@ struct RenderRig {
     ibl::SceneLighting lighting;
     target.bind();
     compositor.drawCameraBackground(*frames.textures[0]);
-    return compositor.drawSphereObject(s.scene.camera, s.frames[0].truth.pose, glm::dvec3(0.0, 0.0, 0.035), 0.035,
-                                       material, lighting, maps, error);
+    const glm::dvec3 centre(0.0, 0.0, 0.035);
+    if (blur)
+      blur->beginObject(passes::projectedBounds(s.scene.camera, s.frames[0].truth.pose, centre - glm::dvec3(0.035),
+                                                centre + glm::dvec3(0.035), 0.01, 2),
+                        blur_sigma_px);
+    if (!compositor.drawSphereObject(s.scene.camera, s.frames[0].truth.pose, centre, 0.035, material, lighting, maps,
+                                     error))
+      return false;
+    return blur == nullptr || blur->composite(blur_noise, blur_noise_texture, error);
   }
 };
 
 // With `match_noise`, the frame's noise added to the sphere (the compose
-// stage with camera_match.noise): its cost is the difference.
-void renderFrame(benchmark::State& state, bool match_noise) {
+// stage with camera_match.noise); with `match_blur` too, the sphere through
+// the blur layer by 1.04 px (a 1 px lens with the pixel's area) and the
+// noise at its composite: their cost is the difference.
+void renderFrame(benchmark::State& state, bool match_noise, bool match_blur = false) {
   if (!requireGl(state)) return;
   RenderRig rig;
   std::string error;
@@ -817,7 +833,21 @@ void renderFrame(benchmark::State& state, bool match_noise) {
   match.model.dark_code = glm::dvec3(40.0);
   match.model.bright_code = glm::dvec3(190.0);
   match.model.dark_sigma_code = match.model.bright_sigma_code = glm::dvec3(1.5);
-  if (match_noise) rig.compositor.setSensorNoise(&match);
+  passes::ObjectBlurLayer blur;
+  passes::SensorNoiseTexture noise_texture;
+  if (match_blur) {
+    if (!blur.init(setup().scene.camera.width_px, setup().scene.camera.height_px, ibl::CameraTransfer{}, error) ||
+        !noise_texture.init(error)) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+    rig.blur = &blur;
+    rig.blur_sigma_px = 1.04;
+    rig.blur_noise = &match;
+    rig.blur_noise_texture = &noise_texture;
+  } else if (match_noise) {
+    rig.compositor.setSensorNoise(&match);
+  }
   for (auto _ : state) {
     ++match.frame_index;
     if (!rig.draw(error)) {
@@ -1424,6 +1454,11 @@ void registerAll() {
         ->MinTime(kMinTime);
   benchmark::RegisterBenchmark("shadow_composite/640x480", shadowComposite)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
   benchmark::RegisterBenchmark("render/640x480", [](benchmark::State& state) { renderFrame(state, false); })
+      ->Unit(kMillisecond)
+      ->UseRealTime()
+      ->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("render/640x480/match_noise_blur",
+                               [](benchmark::State& state) { renderFrame(state, true, true); })
       ->Unit(kMillisecond)
       ->UseRealTime()
       ->MinTime(kMinTime);

@@ -214,6 +214,10 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.camera_match.noise_smoothing_new_weight =
       camera_match.readDouble("noise_smoothing_new_weight", settings.camera_match.noise_smoothing_new_weight,
                               Range::openClosed(0.0, 1.0));
+  settings.camera_match.blur = camera_match.readBool("blur", settings.camera_match.blur);
+  settings.camera_match.blur_smoothing_new_weight =
+      camera_match.readDouble("blur_smoothing_new_weight", settings.camera_match.blur_smoothing_new_weight,
+                              Range::openClosed(0.0, 1.0));
   camera_match.rejectUnknownFields();
 
   ConfigReader sim = file.section("sim");

@@ -33,6 +33,7 @@
 #include "input/status_led.hpp"
 #include "sim/world.hpp"
 #include "stages/compose_stage.hpp"
+#include "stages/blur_match_stage.hpp"
 #include "stages/noise_match_stage.hpp"
 #include "stages/frame_context.hpp"
 #include "stages/lights_stage.hpp"
@@ -158,6 +159,7 @@ class Kiosk {
     PROBELIGHT_TRY(lights_->run(ctx, *maps_));
     PROBELIGHT_TRY(shadows_->run(ctx.number, lights_->domeAt(ctx.time_s), lights_->domeSize()));
     noise_->run(ctx.track, ctx.frame, ctx.number);
+    blur_->run(ctx.track, ctx.frame);
     PROBELIGHT_TRY(show(ctx.track, ctx.status, ctx.number));
     last_track_ = ctx.track;
     last_frame_number_ = ctx.number;
@@ -184,6 +186,7 @@ class Kiosk {
     kept_frame_status_.reset();  // the display's frame is drawn anew
     display_->beginFrame();
     compose_->setSensorNoise(noise_->match());
+    compose_->setBlur(blur_->edgeSigmaPx());
     PROBELIGHT_TRY(compose_->draw(track, status, upload_->texture(), *maps_, *shadows_, lights_->sceneLighting()));
     return present(status, frame_number, log_status_change);
   }
@@ -197,6 +200,7 @@ class Kiosk {
     track_->skip(kReason);
     maps_->skip(kReason);
     noise_->skip(kReason);
+    blur_->skip(kReason);
     // The display's frame already holds the kept frame with this status
     // (nothing was drawn since): it is shown again, not drawn again.
     if (kept_frame_status_ == status) {
@@ -431,6 +435,8 @@ class Kiosk {
     compose_ = std::make_unique<ComposeStage>(object, inputs_.camera, inputs_.rig, settings.maps.stages.camera_transfer,
                                               report_, settings.gpu_finish);
     noise_ = std::make_unique<NoiseMatchStage>(settings.camera_match, inputs_.camera, inputs_.rig, report_);
+    blur_ = std::make_unique<BlurMatchStage>(settings.camera_match, inputs_.camera, inputs_.rig,
+                                             settings.maps.stages.camera_transfer, report_);
     if (world_) truth_ = std::make_unique<TruthMonitor>(world_, report_);
     PROBELIGHT_TRY(upload_->init(capabilities_));
     PROBELIGHT_TRY(maps_->init(capabilities_));
@@ -596,6 +602,7 @@ class Kiosk {
   std::unique_ptr<LightsStage> lights_;
   std::unique_ptr<ShadowsStage> shadows_;
   std::unique_ptr<NoiseMatchStage> noise_;
+  std::unique_ptr<BlurMatchStage> blur_;
   std::unique_ptr<ComposeStage> compose_;
   std::unique_ptr<TruthMonitor> truth_;
 

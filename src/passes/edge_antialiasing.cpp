@@ -187,11 +187,7 @@ bool EdgeLayer::init(const gles::Capabilities& capabilities, const EdgeAntialias
 
 void EdgeLayer::begin(const PixelRect& region) {
   region_ = region;
-  glGetIntegerv(GL_FRAMEBUFFER_BINDING, &saved_framebuffer_);
-  glGetIntegerv(GL_VIEWPORT, saved_viewport_);
-  glGetFloatv(GL_COLOR_CLEAR_VALUE, saved_clear_color_);
-  saved_scissor_test_ = glIsEnabled(GL_SCISSOR_TEST);
-  glGetIntegerv(GL_SCISSOR_BOX, saved_scissor_box_);
+  saved_.capture();
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
   const int k = choice_.grid;
   glViewport(0, 0, width_px_ * k, height_px_ * k);
@@ -204,14 +200,7 @@ void EdgeLayer::begin(const PixelRect& region) {
 }
 
 void EdgeLayer::restore() {
-  glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(saved_framebuffer_));
-  glViewport(saved_viewport_[0], saved_viewport_[1], saved_viewport_[2], saved_viewport_[3]);
-  glClearColor(saved_clear_color_[0], saved_clear_color_[1], saved_clear_color_[2], saved_clear_color_[3]);
-  glScissor(saved_scissor_box_[0], saved_scissor_box_[1], saved_scissor_box_[2], saved_scissor_box_[3]);
-  if (saved_scissor_test_)
-    glEnable(GL_SCISSOR_TEST);
-  else
-    glDisable(GL_SCISSOR_TEST);
+  saved_.restore();
 }
 
 bool EdgeLayer::composite(std::string& error, const SensorNoiseMatch* noise, const SensorNoiseTexture* texture) {
@@ -229,7 +218,7 @@ bool EdgeLayer::composite(std::string& error, const SensorNoiseMatch* noise, con
   restore();
   // The frame's viewport covers the frame one to one (the renderer's contract).
   glEnable(GL_SCISSOR_TEST);
-  glScissor(saved_viewport_[0] + region_.x, saved_viewport_[1] + (height_px_ - region_.y - region_.height),
+  glScissor(saved_.viewport[0] + region_.x, saved_.viewport[1] + (height_px_ - region_.y - region_.height),
             region_.width, region_.height);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
@@ -250,8 +239,7 @@ bool EdgeLayer::composite(std::string& error, const SensorNoiseMatch* noise, con
     glBindTexture(GL_TEXTURE_2D, 0);
     glActiveTexture(GL_TEXTURE0);
   }
-  glScissor(saved_scissor_box_[0], saved_scissor_box_[1], saved_scissor_box_[2], saved_scissor_box_[3]);
-  if (!saved_scissor_test_) glDisable(GL_SCISSOR_TEST);
+  saved_.restoreScissor();
   return gles::checkGl("EdgeLayer::composite", error);
 }
 

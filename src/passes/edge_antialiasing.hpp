@@ -39,6 +39,7 @@
 #include "core/types.hpp"
 #include "gles/capabilities.hpp"
 #include "gles/gl_objects.hpp"
+#include "passes/framebuffer_state_guard.hpp"
 #include "passes/camera_response.hpp"
 
 namespace probelight::passes {
@@ -159,11 +160,7 @@ class EdgeLayer {
   gles::FullScreenQuad quad_;
   std::uint64_t bytes_ = 0;
   int samples_ = 1;
-  GLint saved_framebuffer_ = 0;
-  GLint saved_viewport_[4] = {0, 0, 0, 0};
-  GLfloat saved_clear_color_[4] = {0, 0, 0, 0};
-  GLboolean saved_scissor_test_ = GL_FALSE;
-  GLint saved_scissor_box_[4] = {0, 0, 0, 0};
+  DrawTargetState saved_;  // the caller's, while the layer is bound
   PixelRect region_;
 };
 

@@ -92,8 +92,20 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
                           const ibl::SceneLighting& lighting) {
   GpuStageTimer timer(report_, kStageName, finish_gpu_);
   std::string error;
+  const bool object_drawn = track.found && maps.haveMaps();
+  const bool blurred = object_drawn && blur_edge_sigma_px_.has_value();
+  if (blurred) {
+    if (!blur_layer_.ready(camera_.width_px, camera_.height_px) &&
+        !blur_layer_.init(camera_.width_px, camera_.height_px, camera_transfer_, error))
+      return Status::runtimeFailure("GPU set-up failed for the object's blur: " + error);
+    if (noise_ != nullptr && !noise_texture_.valid() && !noise_texture_.init(error))
+      return Status::runtimeFailure(error);
+  }
+  // Blurred, the noise goes in after the blur (the layer's composite).
+  compositor_.setSensorNoise(blurred ? nullptr : noise_);
+  model_renderer_.setSensorNoise(blurred ? nullptr : noise_);
   compositor_.drawCameraBackground(frame);
-  if (track.found && maps.haveMaps()) {
+  if (object_drawn) {
     // The shadow first: the object then covers the part of it under itself.
     if (!shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error)) return Status::runtimeFailure(error);
     if (object_.isModel() && shadows.enabled())
@@ -109,13 +121,30 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
       near_floor.camera_frame = &frame;
       model_renderer_.setNearFloor(near_floor);
     }
+    if (blurred) {
+      const glm::dvec3 centre = object_.shape.boundingCentre();
+      const glm::dvec3 half(object_.shape.boundingRadius());
+      const passes::PixelRect region =
+          passes::projectedBounds(camera_, track.pose, centre - half, centre + half, 0.01, /*margin_px=*/2);
+      // The object's own edges: a pixel's area where they are anti-aliased
+      // (a model's layer), none where drawn one sample a pixel.
+      const bool antialiased =
+          object_.isModel() && model_renderer_.stats().edges.strategy != passes::EdgeStrategy::kOff;
+      blur_layer_.beginObject(region,
+                              passes::objectBlurSigmaPx(*blur_edge_sigma_px_, antialiased ? 1.0 / 12.0 : 0.0));
+    }
     const bool drawn =
         object_.isModel() ? model_renderer_.draw(camera_, track.pose, lighting, maps.maps(), error)
         : mesh_.empty()
             ? compositor_.drawSphereObject(camera_, track.pose, object_.shape.boundingCentre(), object_.shape.radius_m,
                                            object_.material, lighting, maps.maps(), error)
             : compositor_.drawMeshObject(camera_, track.pose, mesh_, object_.material, lighting, maps.maps(), error);
-    if (!drawn) return Status::runtimeFailure(error);
+    if (!drawn) {
+      if (blurred) blur_layer_.restore();
+      return Status::runtimeFailure(error);
+    }
+    if (blurred && !blur_layer_.composite(noise_, noise_ ? &noise_texture_ : nullptr, error))
+      return Status::runtimeFailure(error);
     if (object_.isModel()) {
       // A draw into another kind of framebuffer may choose differently.
       nlohmann::json edges = edgeReport(model_renderer_.stats());

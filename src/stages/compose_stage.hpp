@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,7 @@
 #include "ibl/surface_shading.hpp"
 #include "passes/camera_frame_texture.hpp"
 #include "passes/model_renderer.hpp"
+#include "passes/object_blur.hpp"
 #include "passes/object_compositor.hpp"
 #include "stages/maps_stage.hpp"
 #include "stages/run_report.hpp"
@@ -56,10 +58,11 @@ class ComposeStage {
               MapsStage& maps, ShadowsStage& shadows, const ibl::SceneLighting& lighting);
   // Noise matched to the frame's (stages/noise_match_stage.hpp) for the
   // object drawn from now on; null: none. It must outlive the draws.
-  void setSensorNoise(const passes::SensorNoiseMatch* noise) {
-    compositor_.setSensorNoise(noise);
-    model_renderer_.setSensorNoise(noise);
-  }
+  void setSensorNoise(const passes::SensorNoiseMatch* noise) { noise_ = noise; }
+  // The frame's edge spread (stages/blur_match_stage.hpp) the object is
+  // given from now on (passes/object_blur.hpp); none: drawn sharp. With it,
+  // the noise goes in after the blur.
+  void setBlur(std::optional<double> edge_sigma_px) { blur_edge_sigma_px_ = edge_sigma_px; }
   // The display still holds what was drawn last: shown again, not drawn.
   void skip(const std::string& reason) { report_.recordStageSkip(kStageName, reason); }
 
@@ -72,6 +75,10 @@ class ComposeStage {
   bool finish_gpu_;
   passes::ObjectCompositor compositor_;
   passes::ModelRenderer model_renderer_;  // for a model
+  const passes::SensorNoiseMatch* noise_ = nullptr;
+  std::optional<double> blur_edge_sigma_px_;
+  passes::ObjectBlurLayer blur_layer_;      // made on the first blurred frame
+  passes::SensorNoiseTexture noise_texture_;  // the blur layer's, made on first use
   std::vector<passes::ObjectCompositor::MeshVertex> mesh_;  // a box's triangles (empty for a sphere)
   StatusOverlay overlay_;
 };

@@ -141,11 +141,16 @@ struct StateConfig {
 };
 
 // The virtual object passed through what the frame went through
-// (issue 19): for now its noise, measured on the tag's cells each frame
+// (issue 19): its noise, measured on the tag's cells each frame
 // (ibl/sensor_noise.hpp) and added to the object's pixels only
-// (stages/noise_match_stage.hpp).
+// (stages/noise_match_stage.hpp), and its blur, measured on the tag's
+// border (ibl/edge_blur.hpp) and given to the object's edges and texture
+// (stages/blur_match_stage.hpp, passes/object_blur.hpp).
 struct CameraMatchConfig {
   bool noise = false;
+  bool blur = false;
+  // As noise_smoothing_new_weight, for the edge's spread (in variance).
+  double blur_smoothing_new_weight = 0.3;
   // Each frame's measurement moves the kept one this far toward it: the
   // estimate's own scatter (about 2% of sigma a frame) falls by
   // sqrt(weight / (2 - weight)), to 1% at 0.3, and a change of sensor gain

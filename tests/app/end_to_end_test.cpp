@@ -1011,5 +1011,30 @@ TEST_F(EndToEnd, NoiseMatchMeasuresTheSimulatedCamerasNoiseAndShowsAsRunsAndSkip
   EXPECT_FALSE(report_off.contains("camera_match"));
 }
 
+// camera_match.blur: the stage measures the frame's edge spread on the tag
+// each frame it shows (here the simulator's lens blur of 1 px, whose edge
+// has sqrt(1 + 1/12) px with the pixel's area), and the report says so.
+TEST_F(EndToEnd, BlurMatchMeasuresTheSimulatedLensAndShowsAsRunsAndSkips) {
+  const int frames = 12;
+  const fs::path config = dir_ / "blur.yaml";
+  std::ofstream(config) << "lights:\n  shadows: false\ncamera_match:\n  blur: true\nsim:\n  lens_blur_sigma: 1.0\n";
+  const fs::path out = dir_ / "blur";
+  const CommandResult result = run("run --source sim --display headless --frames " + std::to_string(frames) +
+                                   " --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  const nlohmann::json& stage = report["stages"]["match_blur"];
+  EXPECT_EQ(stage["runs"].get<int>() + stage["skipped"].get<int>(), frames);
+  // The shown frames: the first measures, then one in 8 (the bracket's
+  // frames skip as every stage's do).
+  const int shown = frames - report["counters"].value("frames_in_bracket", 0);
+  EXPECT_EQ(stage["runs"].get<int>(), (shown + 7) / 8);
+  EXPECT_EQ(stage["skip_reasons"].value("measured_recently", 0), shown - (shown + 7) / 8);
+  // ibl/edge_blur's bound against the simulator (tests/stages/edge_blur_test.cpp).
+  EXPECT_NEAR(report["camera_match"]["blur"]["edge_sigma_px"].get<double>(), std::sqrt(1.0 + 1.0 / 12.0), 0.07);
+  EXPECT_EQ(report["stages"]["match_noise"]["skip_reasons"]["off"].get<int>(),
+            frames - report["counters"].value("frames_in_bracket", 0));
+}
+
 }  // namespace
 }  // namespace probelight

@@ -1,0 +1,197 @@
+#include "passes/object_blur.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace probelight::passes {
+
+double objectBlurSigmaPx(double frame_edge_sigma_px, double object_edge_variance_px2) {
+  if (!std::isfinite(frame_edge_sigma_px)) return 0.0;
+  return std::sqrt(std::max(frame_edge_sigma_px * frame_edge_sigma_px - object_edge_variance_px2, 0.0));
+}
+
+namespace {
+
+// The sampled Gaussian of `shape` over -taps..taps, normalised; its variance.
+std::vector<double> sampledGaussian(double shape, int taps, double& variance) {
+  std::vector<double> weights(static_cast<size_t>(taps + 1));
+  double sum = 0.0;
+  for (int k = 0; k <= taps; ++k) {
+    weights[static_cast<size_t>(k)] = std::exp(-0.5 * k * k / (shape * shape));
+    sum += k == 0 ? weights[0] : 2.0 * weights[static_cast<size_t>(k)];
+  }
+  variance = 0.0;
+  for (int k = 0; k <= taps; ++k) {
+    weights[static_cast<size_t>(k)] /= sum;
+    variance += 2.0 * k * k * weights[static_cast<size_t>(k)];
+  }
+  return weights;
+}
+
+}  // namespace
+
+std::vector<float> objectBlurWeights(double sigma_px) {
+  if (!(sigma_px > 0.0) || !std::isfinite(sigma_px)) return {1.0f};
+  const int taps = std::clamp(static_cast<int>(std::ceil(3.0 * sigma_px)), 1, kMaxObjectBlurTaps);
+  // A Gaussian sampled at whole texels has less variance than its sigma^2
+  // below about a pixel (0.08 px^2 instead of 0.16 at 0.4): its shape is
+  // widened until the weights' own variance is sigma^2 (bisection; the
+  // variance grows with the shape), so the blur added is what was asked.
+  const double wanted = sigma_px * sigma_px;
+  double low = 0.05, high = 2.0 * sigma_px + 1.0, variance = 0.0;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (low + high);
+    sampledGaussian(mid, taps, variance);
+    (variance < wanted ? low : high) = mid;
+  }
+  const std::vector<double> weights = sampledGaussian(0.5 * (low + high), taps, variance);
+  return std::vector<float>(weights.begin(), weights.end());
+}
+
+bool ObjectBlurLayer::init(int width_px, int height_px, const ibl::CameraTransfer& camera_transfer,
+                           std::string& error) {
+  width_px_ = width_px;
+  height_px_ = height_px;
+  camera_transfer_ = camera_transfer;
+  auto make = [&](gles::Texture& texture, gles::Framebuffer& framebuffer, bool with_depth) {
+    auto made = gles::createTexture2D(width_px, height_px, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, nullptr, error);
+    if (!made) return false;
+    texture = std::move(*made);
+    framebuffer = gles::Framebuffer::create();
+    GLint previous = 0;
+    glGetIntegerv(GL_FRAMEBUFFER_BINDING, &previous);
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer.id());
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture.id(), 0);
+    if (with_depth) glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.id());
+    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(previous));
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      error = "ObjectBlurLayer " + std::to_string(width_px) + "x" + std::to_string(height_px) +
+              " is incomplete: " + gles::framebufferStatusName(status);
+      return false;
+    }
+    return true;
+  };
+  depth_ = gles::Renderbuffer::create();
+  glBindRenderbuffer(GL_RENDERBUFFER, depth_.id());
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT16, width_px, height_px);
+  glBindRenderbuffer(GL_RENDERBUFFER, 0);
+  // RGB: glCopyTexSubImage2D takes it from any colour buffer (a display's
+  // may have no alpha).
+  auto base = gles::createTexture2D(width_px, height_px, GL_RGB, GL_UNSIGNED_BYTE, GL_NEAREST, nullptr, error);
+  if (!base) return false;
+  base_ = std::move(*base);
+  if (!make(layer_, layer_framebuffer_, true) || !make(horizontal_, horizontal_framebuffer_, false)) return false;
+  glBindTexture(GL_TEXTURE_2D, 0);
+  if (!quad_.init(error)) return false;
+  return gles::checkGl("ObjectBlurLayer::init", error);
+}
+
+const gles::Program* ObjectBlurLayer::program(Pass pass, int taps, bool noise, std::string& error) {
+  const auto key = std::make_tuple(pass, taps, noise);
+  if (auto found = programs_.find(key); found != programs_.end()) return &found->second;
+  std::string defines = "#define TAPS " + std::to_string(taps) + "\n" + cameraResponseDefines(camera_transfer_, noise);
+  if (pass == Pass::kComposite) defines += "#define COMPOSITE\n";
+  auto made = gles::Program::fromEmbedded("object_blur.vert", "object_blur.frag", defines, error);
+  if (!made) return nullptr;
+  return &programs_.emplace(key, std::move(*made)).first->second;
+}
+
+void ObjectBlurLayer::scissorToRegion(int viewport_x, int viewport_y) const {
+  // GL's window rows count from the bottom; the region's from the top.
+  glScissor(viewport_x + region_.x, viewport_y + (height_px_ - region_.y - region_.height), region_.width,
+            region_.height);
+}
+
+void ObjectBlurLayer::beginObject(const PixelRect& region, double sigma_px) {
+  weights_ = objectBlurWeights(sigma_px);
+  const int reach = static_cast<int>(weights_.size()) - 1;
+  const int left = std::max(0, region.x - reach), top = std::max(0, region.y - reach);
+  const int right = std::min(width_px_, region.x + region.width + reach);
+  const int bottom = std::min(height_px_, region.y + region.height + reach);
+  region_ = PixelRect{left, top, std::max(0, right - left), std::max(0, bottom - top)};
+  saved_.capture();
+  // The frame under the region, as the base (texture rows from the
+  // bottom, as the window's).
+  if (!region_.empty()) {
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, base_.id());
+    const int row_from_bottom = height_px_ - region_.y - region_.height;
+    glCopyTexSubImage2D(GL_TEXTURE_2D, 0, region_.x, row_from_bottom, saved_.viewport[0] + region_.x,
+                        saved_.viewport[1] + row_from_bottom, region_.width, region_.height);
+    glBindTexture(GL_TEXTURE_2D, 0);
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, layer_framebuffer_.id());
+  glViewport(0, 0, width_px_, height_px_);
+  // The passes read `reach` texels past the object: the region is grown by
+  // it and cleared whole (transparent), so only the region is drawn and read.
+  glEnable(GL_SCISSOR_TEST);
+  scissorToRegion(0, 0);
+  glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+  glDepthMask(GL_TRUE);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glDisable(GL_SCISSOR_TEST);
+}
+
+void ObjectBlurLayer::restore() {
+  saved_.restore();
+}
+
+bool ObjectBlurLayer::composite(const SensorNoiseMatch* noise, const SensorNoiseTexture* noise_texture,
+                                std::string& error) {
+  const int taps = std::max(static_cast<int>(weights_.size()) - 1, 1);
+  // A zero blur still passes through (the centre's weight 1, its
+  // neighbours' 0), so that the mixing and the noise have one place.
+  std::vector<float> weights = weights_;
+  weights.resize(static_cast<size_t>(taps + 1), 0.0f);
+  const bool add_noise = noise != nullptr && noise_texture != nullptr && noise_texture->valid();
+  const gles::Program* horizontal = program(Pass::kHorizontal, taps, false, error);
+  const gles::Program* composite = horizontal ? program(Pass::kComposite, taps, add_noise, error) : nullptr;
+  if (composite == nullptr) {
+    restore();
+    return false;
+  }
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_BLEND);
+  glActiveTexture(GL_TEXTURE0);
+  // Along rows, layer -> horizontal, over the region.
+  glBindFramebuffer(GL_FRAMEBUFFER, horizontal_framebuffer_.id());
+  glViewport(0, 0, width_px_, height_px_);
+  glEnable(GL_SCISSOR_TEST);
+  scissorToRegion(0, 0);
+  horizontal->use();
+  glBindTexture(GL_TEXTURE_2D, layer_.id());
+  glUniform1i(horizontal->uniform("u_layer"), 0);
+  glUniform2f(horizontal->uniform("u_step"), 1.0f / static_cast<float>(width_px_), 0.0f);
+  glUniform1fv(horizontal->uniform("u_weight"), static_cast<GLsizei>(weights.size()), weights.data());
+  if (camera_transfer_.curve == ibl::CameraTransfer::Curve::kGamma)
+    glUniform1f(horizontal->uniform("u_camera_gamma"), static_cast<float>(camera_transfer_.gamma));
+  quad_.draw(horizontal->attribute("a_position"));
+  // The caller's framebuffer: over the region, the blurred object mixed
+  // into the base.
+  restore();
+  glEnable(GL_SCISSOR_TEST);
+  scissorToRegion(saved_.viewport[0], saved_.viewport[1]);
+  composite->use();
+  glBindTexture(GL_TEXTURE_2D, horizontal_.id());
+  glUniform1i(composite->uniform("u_layer"), 0);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_2D, base_.id());
+  glUniform1i(composite->uniform("u_base"), 2);
+  glUniform2f(composite->uniform("u_step"), 0.0f, 1.0f / static_cast<float>(height_px_));
+  glUniform1fv(composite->uniform("u_weight"), static_cast<GLsizei>(weights.size()), weights.data());
+  if (add_noise)
+    setCameraResponseUniforms(*composite, camera_transfer_, noise, *noise_texture, 1);
+  else if (camera_transfer_.curve == ibl::CameraTransfer::Curve::kGamma)
+    glUniform1f(composite->uniform("u_camera_gamma"), static_cast<float>(camera_transfer_.gamma));
+  quad_.draw(composite->attribute("a_position"));
+  for (GLenum unit : {GL_TEXTURE2, GL_TEXTURE1, GL_TEXTURE0}) {
+    glActiveTexture(unit);
+    glBindTexture(GL_TEXTURE_2D, 0);
+  }
+  saved_.restoreScissor();
+  return gles::checkGl("ObjectBlurLayer::composite", error);
+}
+
+}  // namespace probelight::passes
