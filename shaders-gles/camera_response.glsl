@@ -1,6 +1,6 @@
 // What the frame went through on its way out of the camera, applied to an
-// object rendered in linear light: the camera's transfer (camera_transfer.glsl)
-// and, with MATCH_SENSOR_NOISE, noise of the frame's own statistic
+// object rendered in linear light: the exposure and white balance since its
+// light was measured, the camera's transfer (camera_transfer.glsl) and, with MATCH_SENSOR_NOISE, noise of the frame's own statistic
 // (passes/camera_response.hpp, ibl/sensor_noise.hpp). Needs
 // color_transfer.glsl and camera_transfer.glsl first.
 //
@@ -31,9 +31,15 @@ vec3 sensorNoise(vec3 encoded) {
 }
 #endif
 
-// The encoded colour the camera would have written for `linear`.
+// The camera's exposure and white balance in this frame over those of the
+// frame the object's light was measured in (stages/frame_response.hpp), per
+// channel: 1 while they have not moved.
+uniform vec3 u_response_gain_rgb;
+
+// The encoded colour the camera would have written for `linear` (in the
+// units of the object's light).
 vec3 cameraOutput(vec3 linear) {
-  vec3 encoded = encodeCamera(linear);
+  vec3 encoded = encodeCamera(linear * u_response_gain_rgb);
 #ifdef MATCH_SENSOR_NOISE
   encoded += sensorNoise(encoded);
 #endif

@@ -10,6 +10,10 @@
 // branch is too; at weight 1 the previous map is not read at all.
 uniform samplerCube u_previous;
 uniform float u_previous_scale;
+// The previous map's units into the fresh one's, per channel: the camera's
+// exposure and white balance moved between the two frames
+// (stages/frame_response.hpp), so light is blended with light.
+uniform vec3 u_previous_units;
 uniform float u_new_weight;
 
 // `direction` is the centre of the texel being written; the previous map has
@@ -18,5 +22,6 @@ uniform float u_new_weight;
 vec4 blendWithPrevious(vec4 fresh, vec3 direction) {
   if (u_new_weight >= 1.0) return fresh;
   vec4 previous = decodeCubeTexel(textureCube(u_previous, direction), u_previous_scale);
+  previous.rgb *= u_previous_units;
   return mix(previous, fresh, u_new_weight);
 }

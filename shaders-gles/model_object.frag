@@ -138,6 +138,7 @@ uniform vec3 u_ground_region;
 // their own: a uniform the vertex shader also declares would have to agree
 // in precision.
 uniform sampler2D u_floor_camera;
+uniform vec3 u_floor_camera_to_maps;  // the frame's units into the maps' (exposure and white balance)
 uniform mat3 u_floor_rotation_cam_from_world;
 uniform vec3 u_floor_translation_cam_from_world;
 uniform vec4 u_floor_distortion;
@@ -158,7 +159,7 @@ vec4 cameraFloor(vec2 ground) {
   vec2 inside = min(pixel + 0.5, u_floor_image_size_px - 0.5 - pixel);
   float weight = clamp(min(inside.x, inside.y) / CAMERA_FLOOR_MARGIN_PX, 0.0, 1.0);
   // The frame is upright in its texture, t = 0 at the top row.
-  vec3 seen = decodeCamera(texture2D(u_floor_camera, (pixel + 0.5) / u_floor_image_size_px).rgb);
+  vec3 seen = decodeCamera(texture2D(u_floor_camera, (pixel + 0.5) / u_floor_image_size_px).rgb) * u_floor_camera_to_maps;
   return vec4(seen, weight);
 }
 #endif

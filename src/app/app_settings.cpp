@@ -210,6 +210,7 @@ AppSettings loadAppSettings(const std::string& path) {
   refinement.rejectUnknownFields();
 
   ConfigReader camera_match = file.section("camera_match");
+  settings.camera_match.response = camera_match.readBool("response", settings.camera_match.response);
   settings.camera_match.noise = camera_match.readBool("noise", settings.camera_match.noise);
   settings.camera_match.noise_smoothing_new_weight =
       camera_match.readDouble("noise_smoothing_new_weight", settings.camera_match.noise_smoothing_new_weight,
@@ -251,6 +252,16 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.min_exposure_reported = sim.readBool("min_exposure_reported", settings.sim.min_exposure_reported);
   settings.sim.exposure_control = sim.readBool("exposure_control", settings.sim.exposure_control);
   settings.sim.exposure_stops = sim.readDouble("exposure_stops", settings.sim.exposure_stops, Range::closed(-16.0, 16.0));
+  settings.sim.response_shift_from_frame =
+      sim.readInt("response_shift_from_frame", settings.sim.response_shift_from_frame, Range::atLeast(-1));
+  settings.sim.response_shift_until_frame =
+      sim.readInt("response_shift_until_frame", settings.sim.response_shift_until_frame, Range::atLeast(-1));
+  settings.sim.exposure_shift_stops =
+      sim.readDouble("exposure_shift_stops", settings.sim.exposure_shift_stops, Range::closed(-16.0, 16.0));
+  settings.sim.white_balance_shift_red =
+      sim.readDouble("white_balance_shift_red", settings.sim.white_balance_shift_red, Range::closed(0.125, 8.0));
+  settings.sim.white_balance_shift_blue =
+      sim.readDouble("white_balance_shift_blue", settings.sim.white_balance_shift_blue, Range::closed(0.125, 8.0));
   settings.sim.camera_buffers = sim.readInt("camera_buffers", settings.sim.camera_buffers, Range::closed(2, 16));
   sim.rejectUnknownFields();
 

@@ -57,6 +57,14 @@ struct SimConfig {
   // 2^exposure_stops. scripts/replay-frames.sh renders a bracket's
   // exposures this way for a replay to serve (ImageFrameSource's exposure sets).
   double exposure_stops = 0.0;
+  // Auto exposure and white balance moving mid-run (SimCameraOptions'
+  // response_shift_*): from response_shift_from_frame to
+  // response_shift_until_frame (-1: never / to the end).
+  int response_shift_from_frame = -1;
+  int response_shift_until_frame = -1;
+  double exposure_shift_stops = 0.0;
+  double white_balance_shift_red = 1.0;
+  double white_balance_shift_blue = 1.0;
   // Buffers in the simulated camera's pool: an exposure change reaches the
   // frames from this many after the newest one handed out (its latency, as
   // a real pipeline's queued requests give one).

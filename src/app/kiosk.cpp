@@ -35,6 +35,7 @@
 #include "stages/compose_stage.hpp"
 #include "stages/blur_match_stage.hpp"
 #include "stages/noise_match_stage.hpp"
+#include "stages/response_match_stage.hpp"
 #include "stages/frame_context.hpp"
 #include "stages/lights_stage.hpp"
 #include "stages/maps_stage.hpp"
@@ -155,9 +156,11 @@ class Kiosk {
     }
     PROBELIGHT_TRY(upload_->run(ctx));
     track_->run(ctx);
+    maps_->setLightsFittedAt(lights_->clipReference());
     PROBELIGHT_TRY(maps_->run(ctx, upload_->texture()));
     PROBELIGHT_TRY(lights_->run(ctx, *maps_));
     PROBELIGHT_TRY(shadows_->run(ctx.number, lights_->domeAt(ctx.time_s), lights_->domeSize()));
+    response_->run(ctx.frame, *maps_, ctx.number);
     noise_->run(ctx.track, ctx.frame, ctx.number);
     blur_->run(ctx.track, ctx.frame);
     PROBELIGHT_TRY(show(ctx.track, ctx.status, ctx.number));
@@ -185,6 +188,7 @@ class Kiosk {
               bool log_status_change = true) {
     kept_frame_status_.reset();  // the display's frame is drawn anew
     display_->beginFrame();
+    compose_->setResponseGain(response_->gain());
     compose_->setSensorNoise(noise_->match());
     compose_->setBlur(blur_->edgeSigmaPx());
     PROBELIGHT_TRY(compose_->draw(track, status, upload_->texture(), *maps_, *shadows_, lights_->sceneLighting()));
@@ -199,6 +203,7 @@ class Kiosk {
     upload_->skip(kReason);
     track_->skip(kReason);
     maps_->skip(kReason);
+    response_->skip(kReason);
     noise_->skip(kReason);
     blur_->skip(kReason);
     // The display's frame already holds the kept frame with this status
@@ -415,6 +420,11 @@ class Kiosk {
     camera_options.min_exposure_reported = settings.sim.min_exposure_reported;
     camera_options.exposure_controllable = settings.sim.exposure_control;
     camera_options.exposure_stops = settings.sim.exposure_stops;
+    camera_options.response_shift_from_frame = settings.sim.response_shift_from_frame;
+    camera_options.response_shift_until_frame = settings.sim.response_shift_until_frame;
+    camera_options.exposure_shift_stops = settings.sim.exposure_shift_stops;
+    camera_options.white_balance_shift_red = settings.sim.white_balance_shift_red;
+    camera_options.white_balance_shift_blue = settings.sim.white_balance_shift_blue;
     source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), settings.sim.camera_buffers, camera_options);
     return Status::ok();
   }
@@ -434,6 +444,7 @@ class Kiosk {
     shadows_ = std::make_unique<ShadowsStage>(settings, object.shape, report_);
     compose_ = std::make_unique<ComposeStage>(object, inputs_.camera, inputs_.rig, settings.maps.stages.camera_transfer,
                                               report_, settings.gpu_finish);
+    response_ = std::make_unique<ResponseMatchStage>(settings.camera_match, report_);
     noise_ = std::make_unique<NoiseMatchStage>(settings.camera_match, inputs_.camera, inputs_.rig, report_);
     blur_ = std::make_unique<BlurMatchStage>(settings.camera_match, inputs_.camera, inputs_.rig,
                                              settings.maps.stages.camera_transfer, report_);
@@ -601,6 +612,7 @@ class Kiosk {
   std::unique_ptr<MapsStage> maps_;
   std::unique_ptr<LightsStage> lights_;
   std::unique_ptr<ShadowsStage> shadows_;
+  std::unique_ptr<ResponseMatchStage> response_;
   std::unique_ptr<NoiseMatchStage> noise_;
   std::unique_ptr<BlurMatchStage> blur_;
   std::unique_ptr<ComposeStage> compose_;

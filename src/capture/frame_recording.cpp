@@ -33,6 +33,7 @@ constexpr std::uint64_t kMaxFrameJsonBytes = 64 * 1024;
 constexpr int kMaxStridePaddingBytes = 4096;
 constexpr double kMaxExposureUs = 1e8;  // 100 s: longer than any sensor's
 constexpr double kMaxAnalogueGain = 1024.0;
+constexpr double kMaxColourGain = 32.0;  // libcamera's ColourGains range
 
 const char* matrixName(YcbcrMatrix matrix) {
   return matrix == YcbcrMatrix::kRec601 ? "Rec601" : matrix == YcbcrMatrix::kRec709 ? "Rec709" : "Rec2020";
@@ -217,6 +218,8 @@ bool writeRecordedFrame(const std::string& dir, const std::string& stem, const R
                {"timestamp_ns", frame.metadata.timestamp_ns},
                {"exposure_us", frame.metadata.exposure_us},
                {"analogue_gain", frame.metadata.analogue_gain},
+               {"red_gain", frame.metadata.red_gain},
+               {"blue_gain", frame.metadata.blue_gain},
                {"origin", frame.metadata.origin}};
   if (isYuv(frame.layout))
     json["ycbcr"] = {{"matrix", matrixName(frame.encoding.matrix)}, {"range", frame.encoding.full_range ? "full" : "limited"}};
@@ -319,6 +322,9 @@ Status readRecordedFrame(const std::string& path, FrameBuffer& frame) {
     const long long timestamp_ns = integer(json, "timestamp_ns", 0, std::numeric_limits<long long>::max());
     const double exposure_us = number(json, "exposure_us", 0.0, kMaxExposureUs);
     const double analogue_gain = number(json, "analogue_gain", 0.0, kMaxAnalogueGain);
+    // The white balance's gains (recordings before them say none: 0, unknown).
+    const double red_gain = json.contains("red_gain") ? number(json, "red_gain", 0.0, kMaxColourGain) : 0.0;
+    const double blue_gain = json.contains("blue_gain") ? number(json, "blue_gain", 0.0, kMaxColourGain) : 0.0;
     raw_name = text(json, "raw");
     if (raw_name.empty() || raw_name.find('/') != std::string::npos || raw_name == "." || raw_name == "..")
       throw FieldError("raw", "not a file name in the recording's folder");
@@ -335,6 +341,8 @@ Status readRecordedFrame(const std::string& path, FrameBuffer& frame) {
     frame.metadata.timestamp_ns = timestamp_ns;
     frame.metadata.exposure_us = exposure_us;
     frame.metadata.analogue_gain = analogue_gain;
+    frame.metadata.red_gain = red_gain;
+    frame.metadata.blue_gain = blue_gain;
     frame.metadata.origin = json_path.string();
     frame.width_px = width;
     frame.height_px = height;

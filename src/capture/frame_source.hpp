@@ -27,6 +27,10 @@ struct FrameMetadata {
   std::int64_t timestamp_ns = 0;
   double exposure_us = 0.0;     // 0 when unknown
   double analogue_gain = 0.0;   // 0 when unknown
+  // The white balance's colour gains on red and blue (green 1), as
+  // libcamera's ColourGains: 0 when unknown.
+  double red_gain = 0.0;
+  double blue_gain = 0.0;
   std::string origin;           // file name or "sim:<index>", for messages
   std::optional<FrameTruth> truth;
 };

@@ -407,6 +407,12 @@ FrameWait LibcameraSource::waitFrame(std::chrono::milliseconds timeout, FrameLea
   if (auto timestamp = metadata.get(libcamera::controls::SensorTimestamp)) frame.metadata.timestamp_ns = *timestamp;
   if (auto exposure = metadata.get(libcamera::controls::ExposureTime)) frame.metadata.exposure_us = *exposure;
   if (auto gain = metadata.get(libcamera::controls::AnalogueGain)) frame.metadata.analogue_gain = *gain;
+  // The white balance's gains on red and blue: the object follows them as
+  // it follows the exposure (stages/camera_response_follower.hpp).
+  if (auto colour_gains = metadata.get(libcamera::controls::ColourGains)) {
+    frame.metadata.red_gain = (*colour_gains)[0];
+    frame.metadata.blue_gain = (*colour_gains)[1];
+  }
   if (frame.metadata.exposure_us > 0.0) {
     std::lock_guard<std::mutex> lock(mutex_);
     exposure_.onFrame({frame.metadata.exposure_us, frame.metadata.analogue_gain > 0.0 ? frame.metadata.analogue_gain : 1.0});

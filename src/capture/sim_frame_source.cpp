@@ -119,7 +119,15 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
   // The sensor's own exposure: 10 ms at gain 1 (the scene's exposure),
   // shifted by exposure_stops.
   constexpr double kSimExposureUs = 10000.0;
-  ManualExposure exposure{kSimExposureUs * std::exp2(options_.exposure_stops), 1.0};
+  const bool shifted = options_.response_shift_from_frame >= 0 &&
+                       index >= static_cast<std::uint64_t>(options_.response_shift_from_frame) &&
+                       (options_.response_shift_until_frame < 0 ||
+                        index < static_cast<std::uint64_t>(options_.response_shift_until_frame));
+  const double own_stops = options_.exposure_stops + (shifted ? options_.exposure_shift_stops : 0.0);
+  ManualExposure exposure{kSimExposureUs * std::exp2(own_stops), 1.0};
+  // A bracket's frames keep the white balance (AWB is locked with AE).
+  glm::dvec3 white_balance(1.0);
+  if (shifted) white_balance = {options_.white_balance_shift_red, 1.0, options_.white_balance_shift_blue};
   {
     std::lock_guard<std::mutex> lock(exposure_mutex_);
     if (const auto scheduled = exposure_schedule_.at(index)) exposure = *scheduled;
@@ -129,10 +137,10 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
   try {
     FrameTruth truth;
     if (options_.layout != PixelLayout::kRgb8) {
-      world_->render(index, rendered_, truth, exposure_ev);
+      world_->render(index, rendered_, truth, exposure_ev, white_balance);
       encodeSimFrame(rendered_, options_.layout, buffer);
     } else {
-      world_->render(index, buffer.rgb, truth, exposure_ev);
+      world_->render(index, buffer.rgb, truth, exposure_ev, white_balance);
       buffer.finishRgb();
     }
     buffer.metadata = FrameMetadata{};
@@ -142,6 +150,8 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
     buffer.metadata.origin = "sim:" + std::to_string(index);
     buffer.metadata.exposure_us = exposure.exposure_us;
     buffer.metadata.analogue_gain = exposure.analogue_gain;
+    buffer.metadata.red_gain = white_balance.r;
+    buffer.metadata.blue_gain = white_balance.b;
     buffer.metadata.truth = truth;
   } catch (const std::exception& e) {
     error = "sim frame " + std::to_string(index) + ": " + e.what();

@@ -44,6 +44,17 @@ struct SimCameraOptions {
   int failed_restarts = 0;
   // The sensor's own exposure outside a bracket, in stops from the scene's.
   double exposure_stops = 0.0;
+  // Auto exposure and white balance moving (issue 19's camera response):
+  // from frame response_shift_from_frame up to (not including)
+  // response_shift_until_frame (-1: to the end) every frame outside a
+  // bracket is taken exposure_shift_stops further, and with its red and
+  // blue multiplied by white_balance_shift_red/blue; the metadata says so
+  // (the colour gains are 1 outside the window). -1: never.
+  std::int64_t response_shift_from_frame = -1;
+  std::int64_t response_shift_until_frame = -1;
+  double exposure_shift_stops = 0.0;
+  double white_balance_shift_red = 1.0;
+  double white_balance_shift_blue = 1.0;
 };
 
 class SimFrameSource : public ThreadedFrameSource {

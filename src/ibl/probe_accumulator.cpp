@@ -99,12 +99,16 @@ void ProbeAccumulator::clear() {
   seen_texels_ = 0;
 }
 
-void ProbeAccumulator::scaleRadiance(double factor) {
-  if (!(factor > 0.0) || !std::isfinite(factor)) return;
+void ProbeAccumulator::scaleRadiance(double factor) { scaleRadiance(glm::dvec3(factor)); }
+
+void ProbeAccumulator::scaleRadiance(const glm::dvec3& factor_rgb) {
+  for (int c = 0; c < 3; ++c)
+    if (!(factor_rgb[c] > 0.0) || !std::isfinite(factor_rgb[c])) return;
+  const glm::vec3 factor(factor_rgb);
   for (glm::vec4& texel : texels_) {
-    texel.r *= static_cast<float>(factor);
-    texel.g *= static_cast<float>(factor);
-    texel.b *= static_cast<float>(factor);
+    texel.r *= factor.r;
+    texel.g *= factor.g;
+    texel.b *= factor.b;
   }
 }
 
@@ -306,12 +310,14 @@ double ProbeAccumulator::seenSolidAngleFraction() const {
   return seen / (4.0 * std::numbers::pi);
 }
 
-CubeMapRGB ProbeAccumulator::radianceMap(float clamp_level) const {
+CubeMapRGB ProbeAccumulator::radianceMap(float clamp_level) const { return radianceMap(glm::vec3(clamp_level)); }
+
+CubeMapRGB ProbeAccumulator::radianceMap(const glm::vec3& clamp_rgb) const {
   const int n = settings_.face_size;
   CubeMapRGB map(n);
   const std::size_t per_face = static_cast<std::size_t>(n) * n;
   for (std::size_t i = 0; i < texels_.size(); ++i)
-    map.faces[i / per_face][i % per_face] = glm::min(glm::vec3(texels_[i]), glm::vec3(clamp_level));
+    map.faces[i / per_face][i % per_face] = glm::min(glm::vec3(texels_[i]), clamp_rgb);
   return map;
 }
 

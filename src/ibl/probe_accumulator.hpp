@@ -134,6 +134,8 @@ class ProbeAccumulator {
   void clear();
   // Every radiance times `factor` (> 0, finite): the reference exposure moved.
   void scaleRadiance(double factor);
+  // Per channel (a white balance's move); all three finite and > 0, else nothing.
+  void scaleRadiance(const glm::dvec3& factor_rgb);
   // The kept estimate of `texel` becomes a lower bound (a caller knows its
   // samples were biased low: read beside clipped pixels). Unseen: nothing.
   void demoteToLowerBound(std::size_t texel);
@@ -156,6 +158,7 @@ class ProbeAccumulator {
   // `clamp_level` (the live maps hold what an 8-bit camera shows; the rest
   // is the clipped lights').
   CubeMapRGB radianceMap(float clamp_level = INFINITY) const;
+  CubeMapRGB radianceMap(const glm::vec3& clamp_rgb) const;
   // 1 where seen, 0 where not (EnvironmentMaps' validity layout).
   std::vector<float> validity() const;
   // 1 where the estimate is a lower bound (bracketToCubeMap's still_clipped layout).

@@ -62,6 +62,10 @@ struct SceneLighting {
   static constexpr int kMaxClippedLights = 4;
   std::array<glm::vec3, kMaxClippedLights> clipped_direction_w{};
   std::array<glm::vec3, kMaxClippedLights> clipped_diffuse_rgb{};
+  // The dome lights' irradiances (a model's self-shadow subtracts them) are
+  // kept as fitted; this brings them into the maps' units, as the fields
+  // above already are (stages/frame_response.hpp).
+  glm::vec3 dome_rgb_scale{1.0f};
 };
 
 // normal_w and to_eye_w are unit vectors in W. Maps are sampled bilinearly.

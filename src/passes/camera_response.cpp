@@ -59,7 +59,9 @@ glm::vec2 noiseOffsetForFrame(std::uint64_t frame_index, int size_px) {
 }
 
 void setCameraResponseUniforms(const gles::Program& program, const ibl::CameraTransfer& transfer,
-                               const SensorNoiseMatch* noise, const SensorNoiseTexture& texture, int unit) {
+                               const glm::vec3& response_gain_rgb, const SensorNoiseMatch* noise,
+                               const SensorNoiseTexture& texture, int unit) {
+  glUniform3fv(program.uniform("u_response_gain_rgb"), 1, glm::value_ptr(response_gain_rgb));
   if (transfer.curve == ibl::CameraTransfer::Curve::kGamma)
     glUniform1f(program.uniform("u_camera_gamma"), static_cast<float>(transfer.gamma));
   if (noise == nullptr) return;

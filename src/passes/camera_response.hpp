@@ -48,10 +48,13 @@ std::vector<std::uint8_t> standardNormalTexels(int size_px, std::uint32_t seed);
 // scramble of the index, so consecutive frames' patterns are unrelated.
 glm::vec2 noiseOffsetForFrame(std::uint64_t frame_index, int size_px);
 
-// u_camera_gamma for a gamma transfer; with `noise`, its texture on `unit`
-// and its uniforms. `program` must be in use and built with
-// cameraResponseDefines(transfer, noise != nullptr).
+// u_camera_gamma for a gamma transfer, u_response_gain_rgb (the exposure
+// and white balance now over the object's light's: camera_response.glsl's
+// cameraOutput); with `noise`, its texture on `unit` and its uniforms.
+// `program` must be in use and built with cameraResponseDefines(transfer,
+// noise != nullptr).
 void setCameraResponseUniforms(const gles::Program& program, const ibl::CameraTransfer& transfer,
-                               const SensorNoiseMatch* noise, const SensorNoiseTexture& texture, int unit);
+                               const glm::vec3& response_gain_rgb, const SensorNoiseMatch* noise,
+                               const SensorNoiseTexture& texture, int unit);
 
 }  // namespace probelight::passes

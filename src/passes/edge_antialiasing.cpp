@@ -225,7 +225,7 @@ bool EdgeLayer::composite(std::string& error, const SensorNoiseMatch* noise, con
   glEnable(GL_BLEND);
   glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
   program.use();
-  if (add_noise) setCameraResponseUniforms(program, {}, noise, *texture, 1);
+  if (add_noise) setCameraResponseUniforms(program, {}, glm::vec3(1.0f), noise, *texture, 1);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, layer_.id());
   glUniform1i(program.uniform("u_layer"), 0);

@@ -375,8 +375,13 @@ void EnvironmentMaps::bindPreviousDiffuse(const gles::Program& program, float ne
   glBindTexture(GL_TEXTURE_CUBE_MAP, diffuse_.texture.id());
   glUniform1i(program.uniform("u_previous"), 1);
   glUniform1f(program.uniform("u_previous_scale"), diffuse_.linear_scale);
+  glUniform3fv(program.uniform("u_previous_units"), 1, glm::value_ptr(previous_units_));
   glUniform1f(program.uniform("u_new_weight"), new_weight);
   glActiveTexture(GL_TEXTURE0);
+}
+
+float EnvironmentMaps::previousScaleInNewUnits() const {
+  return diffuse_.linear_scale * std::max({previous_units_.r, previous_units_.g, previous_units_.b});
 }
 
 void EnvironmentMaps::swapDiffuse(float linear_scale) {
@@ -441,7 +446,7 @@ bool EnvironmentMaps::updateDiffuse(std::string& error, float new_weight) {
                    "EnvironmentMaps north pass", error))
     return false;
   const float scale =
-      storage_ == CubeStorage::kSrgb8 ? blendedScale(input_scale, diffuse_.linear_scale, *weight) : 1.0f;
+      storage_ == CubeStorage::kSrgb8 ? blendedScale(input_scale, previousScaleInNewUnits(), *weight) : 1.0f;
   resample_program_.use();
   bindPreviousDiffuse(resample_program_, *weight);
   // Unit 2 (unit 1 holds the previous diffuse cube for the blend).
@@ -528,7 +533,7 @@ bool EnvironmentMaps::updateDiffuseFromSH9(const ibl::SH9RGB& sh, std::string& e
         }
       }
     }
-    scale = blendedScale(static_cast<float>(largest), diffuse_.linear_scale, *weight);
+    scale = blendedScale(static_cast<float>(largest), previousScaleInNewUnits(), *weight);
   }
 
   FramebufferStateGuard guard;

@@ -143,6 +143,10 @@ class EnvironmentMaps {
   // new_weight in [0, 1]: the share of this update in the result (1: no
   // blending, the map is replaced; see above).
   bool updateDiffuse(std::string& error, float new_weight = 1.0f);
+  // What the current diffuse map's values are multiplied by to be in the
+  // next update's units (the camera's exposure and white balance moved
+  // between their frames), for the blend; 1 until set.
+  void setPreviousDiffuseUnits(const glm::vec3& previous_to_new) { previous_units_ = previous_to_new; }
   // Stage 3, SH9 alternative: renders max(0, E(n)) / pi from `sh` (see
   // ibl::sh9DiffuseMap) into the diffuse map, alpha 1, blended as above. In
   // the 8-bit storage the scale is max(1, the largest value stored).
@@ -196,6 +200,8 @@ class EnvironmentMaps {
   void bindPreviousDiffuse(const gles::Program& program, float new_weight) const;
   // Makes the freshly written spare the diffuse map.
   void swapDiffuse(float linear_scale);
+  // The previous diffuse map's 8-bit scale in the next update's units.
+  float previousScaleInNewUnits() const;
   std::optional<ibl::CubeMapRGB> readCube(const GpuCubeMap& map, std::string& error, std::vector<float>* validity) const;
 
   EnvironmentMapSettings settings_;
@@ -215,6 +221,7 @@ class EnvironmentMaps {
   GpuLatLongMap north_latlong_;
   GpuCubeMap diffuse_;
   GpuCubeMap diffuse_spare_;  // the ping-pong partner: the next update writes here, reading diffuse_
+  glm::vec3 previous_units_{1.0f};  // setPreviousDiffuseUnits
   bool diffuse_written_ = false;
   struct GlossyLevel {
     gles::Program prefilter_program;  // cosine_irradiance.frag's PREFILTER_PASS with this level's factor

@@ -444,6 +444,7 @@ bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld&
     return false;
   }
   if (sensor_noise_ != nullptr && !noise_texture_.valid() && !noise_texture_.init(error)) return false;
+  dome_rgb_scale_ = lighting.dome_rgb_scale;
   const int glossy_levels = environment.glossyWritten() ? std::clamp(environment.glossyLevels(), 0, 2) : 0;
   std::vector<double> exponents;
   for (int level = 0; level < glossy_levels; ++level)
@@ -530,7 +531,7 @@ void ModelRenderer::bindSelfShadowLights(const gles::Program& program, const std
     row1.push_back(0.5f * row(1) + half_w);
     row2.push_back(0.5f * row(2) + half_w);
     directions.push_back(light.direction_w);
-    rgb.push_back(light.rgb);
+    rgb.push_back(light.rgb * dome_rgb_scale_);
     const float texel_uv = 1.0f / static_cast<float>(self_shadow_map_size_px_);
     texels.emplace_back(texel_uv, light.depth_range_m > 0.0f ? light.width_m * texel_uv / light.depth_range_m : 0.0f);
   }
@@ -615,8 +616,8 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
   glBindTexture(GL_TEXTURE_2D, brdf_table_.id());
   glUniform1i(program.uniform("u_brdf_table"), unit++);
   glUniform1f(program.uniform("u_brdf_table_size"), static_cast<float>(brdf_table_size_));
-  setCameraResponseUniforms(program, settings_.camera_transfer, noise_in_shader ? sensor_noise_ : nullptr,
-                            noise_texture_, unit);
+  setCameraResponseUniforms(program, settings_.camera_transfer, response_gain_rgb_,
+                            noise_in_shader ? sensor_noise_ : nullptr, noise_texture_, unit);
   unit += noise_in_shader ? 1 : 0;
   for (int slot = 0; slot < kSlotCount; ++slot) {
     if (!piece.slot_used[static_cast<size_t>(slot)]) continue;
@@ -646,6 +647,10 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
       glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
       glBindTexture(GL_TEXTURE_2D, near_floor_.camera_frame->texture());
       glUniform1i(program.uniform("u_floor_camera"), unit++);
+      // The frame's pixels into the units of the maps beside them (the
+      // inverse of the gain the object leaves with).
+      const glm::vec3 frame_to_maps = 1.0f / glm::max(response_gain_rgb_, glm::vec3(1e-6f));
+      glUniform3fv(program.uniform("u_floor_camera_to_maps"), 1, glm::value_ptr(frame_to_maps));
       const glm::mat3 rotation(pose.R_cam_from_world);
       glUniformMatrix3fv(program.uniform("u_floor_rotation_cam_from_world"), 1, GL_FALSE, glm::value_ptr(rotation));
       glUniform3fv(program.uniform("u_floor_translation_cam_from_world"), 1,

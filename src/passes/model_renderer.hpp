@@ -138,6 +138,10 @@ class ModelRenderer {
   // must outlive them. In the model's shader, or at the resolve of a
   // supersampled edge layer (EdgeLayer::addsNoiseAfterResolve).
   void setSensorNoise(const SensorNoiseMatch* noise) { sensor_noise_ = noise; }
+  // The exposure and white balance now over the maps' (1: unmoved), which
+  // the model's linear colour is multiplied by as it leaves
+  // (camera_response.glsl).
+  void setResponseGain(const glm::vec3& gain_rgb) { response_gain_rgb_ = gain_rgb; }
 
   // Chooses the edge anti-aliasing for frames of width_px x height_px drawn
   // into a framebuffer with target_samples (GL_SAMPLES; 0 single-sampled)
@@ -204,6 +208,8 @@ class ModelRenderer {
   int self_shadow_lights_read_ = 0;
   NearFloor near_floor_;
   const SensorNoiseMatch* sensor_noise_ = nullptr;
+  glm::vec3 response_gain_rgb_{1.0f};
+  glm::vec3 dome_rgb_scale_{1.0f};  // the draw's SceneLighting::dome_rgb_scale
   SensorNoiseTexture noise_texture_;  // made on the first draw with noise
   ModelUploadStats stats_;
   std::vector<std::string> warnings_;

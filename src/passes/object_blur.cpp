@@ -182,7 +182,7 @@ bool ObjectBlurLayer::composite(const SensorNoiseMatch* noise, const SensorNoise
   glUniform2f(composite->uniform("u_step"), 0.0f, 1.0f / static_cast<float>(height_px_));
   glUniform1fv(composite->uniform("u_weight"), static_cast<GLsizei>(weights.size()), weights.data());
   if (add_noise)
-    setCameraResponseUniforms(*composite, camera_transfer_, noise, *noise_texture, 1);
+    setCameraResponseUniforms(*composite, camera_transfer_, glm::vec3(1.0f), noise, *noise_texture, 1);
   else if (camera_transfer_.curve == ibl::CameraTransfer::Curve::kGamma)
     glUniform1f(composite->uniform("u_camera_gamma"), static_cast<float>(camera_transfer_.gamma));
   quad_.draw(composite->attribute("a_position"));

@@ -175,7 +175,7 @@ const gles::Program* ObjectCompositor::prepareShading(ObjectShape shape, const C
     bindCubeMapUniforms(program, "u_glossy" + std::to_string(level),
                         level < glossy_levels ? environment.glossy(level) : diffuse, 2 + level);
   glUniform1f(program.uniform("u_toward_upper_rung"), rungs.toward_upper);
-  setCameraResponseUniforms(program, settings_.camera_transfer, sensor_noise_, noise_texture_, 4);
+  setCameraResponseUniforms(program, settings_.camera_transfer, response_gain_rgb_, sensor_noise_, noise_texture_, 4);
   glActiveTexture(GL_TEXTURE0);
 
   glUniform3fv(program.uniform("u_albedo"), 1, glm::value_ptr(material.albedo));

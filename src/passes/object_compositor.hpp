@@ -84,6 +84,10 @@ class ObjectCompositor {
   // Noise matched to the frame's for the objects drawn from now on; null:
   // none. Kept by pointer: it must outlive those draws.
   void setSensorNoise(const SensorNoiseMatch* noise) { sensor_noise_ = noise; }
+  // The exposure and white balance now over the maps' (1: unmoved), which
+  // the object's linear colour is multiplied by as it leaves
+  // (camera_response.glsl).
+  void setResponseGain(const glm::vec3& gain_rgb) { response_gain_rgb_ = gain_rgb; }
 
   // Blends straight-alpha RGBA (top row first, sRGB bytes) over the whole viewport.
   bool drawOverlayRGBA(const std::uint8_t* rgba, int width, int height, std::string& error);
@@ -107,6 +111,7 @@ class ObjectCompositor {
   gles::Program image_program_;
   std::map<std::tuple<ObjectShape, int, int, bool>, gles::Program> shading_programs_;
   const SensorNoiseMatch* sensor_noise_ = nullptr;
+  glm::vec3 response_gain_rgb_{1.0f};
   SensorNoiseTexture noise_texture_;  // made on the first frame with noise
   gles::Buffer mesh_vertices_;
   gles::FullScreenQuad quad_;

@@ -1510,9 +1510,9 @@ struct World::Impl {
   // render()'s sensor model for a prepared frame state.
   // `exposure_ev`: stops from the scene's exposure (a bracket frame).
   void renderFrame(const FrameState& fs, std::uint64_t frame_index, ImageRGB8& out, double exposure_ev = 0.0,
-                   const World::PixelWindow* window = nullptr) const {
+                   const World::PixelWindow* window = nullptr, const glm::dvec3& channel_gain = glm::dvec3(1.0)) const {
     out.resize(scene.camera.width_px, scene.camera.height_px);
-    const double scale = exposure * std::exp2(exposure_ev);
+    const glm::dvec3 scale = exposure * std::exp2(exposure_ev) * channel_gain;
     const float sigma = static_cast<float>(scene.noise_sigma_code);
     const std::vector<float>& gaussian = gaussianTable();
     std::uint64_t frame_salt = splitMix64(scene.seed ^ splitMix64(frame_index));
@@ -1546,7 +1546,8 @@ struct World::Impl {
   // by the kernel's radius (within the frame, whose edge pixels repeat
   // outward), so each of its pixels is what the whole frame gives it.
   template <typename Sense>
-  void renderBlurred(const FrameState& fs, const World::PixelWindow* window, double scale, Sense sense) const {
+  void renderBlurred(const FrameState& fs, const World::PixelWindow* window, const glm::dvec3& scale,
+                     Sense sense) const {
     const int width = scene.camera.width_px, height = scene.camera.height_px;
     const std::vector<double> kernel = lensBlurKernel(scene.lens_blur_sigma_px);
     const int radius = static_cast<int>(kernel.size() / 2);
@@ -1850,9 +1851,10 @@ FrameTruth World::truth(std::uint64_t frame_index) const {
   return truth;
 }
 
-void World::render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth, double exposure_ev) const {
+void World::render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth, double exposure_ev,
+                   const glm::dvec3& channel_gain) const {
   const Impl& w = *impl_;
-  w.renderFrame(w.frameState(frame_index), frame_index, out, exposure_ev);
+  w.renderFrame(w.frameState(frame_index), frame_index, out, exposure_ev, nullptr, channel_gain);
   truth = this->truth(frame_index);
 }
 

@@ -63,8 +63,10 @@ class World {
   // Thread-safe and deterministic: the same index gives the same bytes.
   // `exposure_ev` shortens (< 0) or lengthens the exposure by that many
   // stops, as a bracket frame; the truth stays in the scene exposure's
-  // camera linear units.
-  void render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth, double exposure_ev = 0.0) const;
+  // camera linear units. `channel_gain` multiplies the linear light per
+  // channel before the noise and the clip: a white balance's gains.
+  void render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth, double exposure_ev = 0.0,
+              const glm::dvec3& channel_gain = glm::dvec3(1.0)) const;
   FrameTruth truth(std::uint64_t frame_index) const;
   PoseCamFromWorld pose(std::uint64_t frame_index) const;
   double exposure() const;

@@ -40,15 +40,4 @@ std::vector<double> ClippedLightFollower::sharesFor(const ibl::CubeMapRGB& live,
   return share;
 }
 
-std::vector<double> ClippedLightFollower::scalesFor(const ibl::CubeMapRGB& live, double clip_level,
-                                                    double exposure_now) const {
-  return scalesFor(sharesFor(live, clip_level), exposure_now);
-}
-
-std::vector<double> ClippedLightFollower::scalesFor(std::vector<double> shares, double exposure_now) const {
-  const double exposure_ratio = exposure_now / exposure_at_fit_;
-  for (double& s : shares) s *= exposure_ratio;
-  return shares;
-}
-
 }  // namespace probelight

@@ -2,9 +2,10 @@
 // are 8-bit, and the clipped lights carry what they clip. After each map
 // update each light is scaled by the share of its texels that still clip
 // now over the share that did at the fit (a sun gone behind a cloud, a lamp
-// switched off: 0), and by the exposure now over the exposure then (auto
-// exposure runs again after a fit, and the maps are in the camera's linear
-// units). Pure: the caller reads the map back.
+// switched off: 0). The exposure and white balance since the fit (auto
+// exposure runs again after one) are the lights stage's, for every fitted
+// light alike (stages/frame_response.hpp); the fit's exposure is kept here
+// to be stored with the lights. Pure: the caller reads the map back.
 #pragma once
 
 #include <cstdint>
@@ -34,11 +35,6 @@ class ClippedLightFollower {
   // clip does not dim it while the rest of it still clips.
   std::vector<double> sharesFor(const ibl::CubeMapRGB& live, double clip_level,
                                 const std::vector<std::uint8_t>* resolved = nullptr) const;
-  // Each light's scale for a later map `live` of the same size, taken at
-  // `exposure_now` (exposure time x gain).
-  std::vector<double> scalesFor(const ibl::CubeMapRGB& live, double clip_level, double exposure_now) const;
-  // The same from shares sharesFor gave.
-  std::vector<double> scalesFor(std::vector<double> shares, double exposure_now) const;
 
   bool empty() const { return lights_.empty(); }
   const std::vector<ibl::ClippedLight>& lights() const { return lights_; }

@@ -63,6 +63,13 @@ class ComposeStage {
   // given from now on (passes/object_blur.hpp); none: drawn sharp. With it,
   // the noise goes in after the blur.
   void setBlur(std::optional<double> edge_sigma_px) { blur_edge_sigma_px_ = edge_sigma_px; }
+  // The camera's exposure and white balance now over those of the maps'
+  // frame (stages/response_match_stage.hpp), per channel, for the object
+  // drawn from now on.
+  void setResponseGain(const glm::dvec3& gain_rgb) {
+    compositor_.setResponseGain(glm::vec3(gain_rgb));
+    model_renderer_.setResponseGain(glm::vec3(gain_rgb));
+  }
   // The display still holds what was drawn last: shown again, not drawn.
   void skip(const std::string& reason) { report_.recordStageSkip(kStageName, reason); }
 

@@ -133,9 +133,10 @@ Status LightsStage::finishPendingBracket(std::uint64_t frame_number, MapsStage& 
 Status LightsStage::run(FrameContext& ctx, MapsStage& maps) {
   frame_time_s_ = ctx.time_s;
   if (ctx.maps_updated) {
-    PROBELIGHT_TRY(followClippedLights(ctx.number, ctx.frame, maps));
+    PROBELIGHT_TRY(followClippedLights(ctx.number, maps));
     PROBELIGHT_TRY(checkLightChange(ctx.number, maps));
   }
+  showInMapsUnits(maps);
   // The state machine counts frames whose ball the maps hold.
   const FrameOutcome outcome = machine_.onFrame(ctx.maps_current);
   const bool ball_in_view = ctx.track.found && ctx.outline.valid;
@@ -164,6 +165,7 @@ Status LightsStage::run(FrameContext& ctx, MapsStage& maps) {
           if (!rgb) rgb = ctx.frame.toRgb();
           bracket_frames_ = BracketFrames{std::move(*rgb), ctx.view, ctx.outline, exposure_locked_, {},
                                           std::chrono::steady_clock::now(), 0.0, ctx.time_s};
+          bracket_frames_->response = frameResponseOf(ctx.frame.metadata);
           break;
         }
       }
@@ -172,6 +174,7 @@ Status LightsStage::run(FrameContext& ctx, MapsStage& maps) {
       fit_frame.view = ctx.track.found ? &ctx.view : nullptr;
       fit_frame.read_pixel = [&frame = ctx.frame](int x, int y) { return frame.rgbAt(x, y); };
       fit_frame.exposure = {ctx.frame.metadata.exposure_us, ctx.frame.metadata.analogue_gain};
+      fit_frame.response = frameResponseOf(ctx.frame.metadata);
       fit_frame.exposure_locked = exposure_locked_;
       PROBELIGHT_TRY(fitLights(ctx.number, fit_frame, maps));
       break;
@@ -247,6 +250,11 @@ Status LightsStage::finishBracket(std::uint64_t frame_number, MapsStage& maps) {
     return glm::u8vec3(p[0], p[1], p[2]);
   };
   fit_frame.exposure = record.base;
+  // The bracket's merged map is in its base exposure's units; the white
+  // balance was the reference frame's (AWB is locked with AE).
+  fit_frame.response = taken.response;
+  fit_frame.response.exposure_product =
+      record.base.exposure_us > 0.0 ? exposureProduct(record.base.exposure_us, record.base.analogue_gain) : 0.0;
   if (merged.hdr_cube && maps.probe()) {
     // Into the probe, where earlier views' light joins it: the fit reads
     // the probe (fitLights).
@@ -300,10 +308,14 @@ Status LightsStage::fitLights(std::uint64_t frame_number, const FitFrame& fit_fr
   transition_.retarget(fit.dome, frame_time_s_);
   // What checkLightChange compares with later: the same estimate, from the
   // same map.
-  if (const std::optional<ibl::CubeMapRGB> diffuse = maps.maps().readDiffuse(error))
+  if (const std::optional<ibl::CubeMapRGB> diffuse = maps.maps().readDiffuse(error)) {
     lights_fitted_e_up_ = upwardIrradiance(*diffuse);
+    e_up_response_ = maps.mapsResponse();
+  }
   lighting_.highlight_direction_w = glm::vec3(fit.dominant.direction_w);
   lighting_.highlight_rgb = glm::vec3(fit.dominant.rgb);
+  fit_response_ = fit_frame.response;
+  showInMapsUnits(maps);
   report_.count("calibrations_completed");
   // The ball's brightness in the fit follows these (0: the source cannot say).
   exposure_at_last_fit_ = {{"frame", frame_number},
@@ -357,25 +369,46 @@ void LightsStage::saveLighting(const ibl::LightingFit& fit, MapsStage& maps) {
 // clips and by the exposure (stages/clipped_light_follower.hpp). One
 // read-back of the reflection map per map update, none when there are no
 // clipped lights.
-Status LightsStage::followClippedLights(std::uint64_t frame_number, const FrameBuffer& frame, const MapsStage& maps) {
+Status LightsStage::followClippedLights(std::uint64_t frame_number, const MapsStage& maps) {
   if (clipped_.empty()) return Status::ok();
-  std::vector<double> shares, scale;
+  std::vector<double> shares;
   {
     StageTimer timer(report_, kRescaleStageName);
     std::string error;
-    const std::optional<ibl::CubeMapRGB> live = maps.maps().readReflection(error);
+    std::optional<ibl::CubeMapRGB> live = maps.maps().readReflection(error);
     if (!live) return Status::runtimeFailure(error);
+    // Compared with the clip in the fit frame's units: the probe's map is
+    // clipped there (MapsStage::setLightsFittedAt), and a light still as
+    // bright as the clip was then still clips, whatever auto exposure did.
+    const glm::vec3 to_fit(1.0 / responseRatio(fit_response_, maps.mapsResponse()));
+    for (auto& face : live->faces)
+      for (glm::vec3& texel : face) texel *= to_fit;
     // With the probe over views, the texels a sharper view showed the fit's
     // bracket had smeared a light over are no longer the light's.
     const std::vector<std::uint8_t> resolved =
         maps.probe() ? maps.probe()->texelsResolvedBySharperViews() : std::vector<std::uint8_t>{};
     shares = clipped_.sharesFor(*live, clipLevel(), maps.probe() ? &resolved : nullptr);
-    scale = clipped_.scalesFor(shares, exposureProduct(frame.metadata.exposure_us, frame.metadata.analogue_gain));
   }
-  ibl::setClippedLights(lighting_, clipped_.lights(), scale);
+  // In the fit's units, as the rest of lighting_: showInMapsUnits brings
+  // them into the maps' (the exposure now over the exposure at the fit,
+  // and the white balance's gains).
+  ibl::setClippedLights(lighting_, clipped_.lights(), shares);
   report_.count("clipped_rescales");
+  std::vector<double> scale = shares;
+  const double exposure_to_maps = responseRatio(fit_response_, maps.mapsResponse()).g;
+  for (double& s : scale) s *= exposure_to_maps;
   clipped_now_report_ = {{"frame", frame_number}, {"scale", scale}, {"still_clipping_share", shares}};
   return Status::ok();
+}
+
+void LightsStage::showInMapsUnits(const MapsStage& maps) {
+  lights_to_maps_ = responseRatio(fit_response_, maps.mapsResponse());
+  const glm::vec3 factor(lights_to_maps_);
+  shown_lighting_ = lighting_;
+  shown_lighting_.ambient_rgb *= factor;
+  shown_lighting_.highlight_rgb *= factor;
+  for (glm::vec3& rgb : shown_lighting_.clipped_diffuse_rgb) rgb *= factor;
+  shown_lighting_.dome_rgb_scale = factor;
 }
 
 // lights.refit_when_light_changes: at each map update (the policy already
@@ -390,8 +423,11 @@ Status LightsStage::checkLightChange(std::uint64_t frame_number, const MapsStage
   std::string error;
   const std::optional<ibl::CubeMapRGB> diffuse = maps.maps().readDiffuse(error);
   if (!diffuse) return Status::runtimeFailure(error);
+  // Both in the units of the maps the fit read (an exposure or white
+  // balance change is not a change of the light).
   const double before = ibl::luminance(lights_fitted_e_up_);
-  const double now = ibl::luminance(upwardIrradiance(*diffuse));
+  const double now =
+      ibl::luminance(upwardIrradiance(*diffuse) * responseRatio(maps.mapsResponse(), e_up_response_));
   if (before > 0.0 && std::abs(now - before) > config.refit_change_fraction * before) {
     report_.count("refits_for_light_change");
     std::ostringstream message;
@@ -471,6 +507,11 @@ void LightsStage::showStoredLighting(double now_s) {
   ibl::setClippedLights(lighting_, clipped_.lights());
   lighting_.highlight_direction_w = glm::vec3(stored_lighting_->dominant.direction_w);
   lighting_.highlight_rgb = glm::vec3(stored_lighting_->dominant.rgb);
+  // The stored exposure (the white balance is not kept: taken as today's).
+  // exposureProduct's 1 stands for a source that could not say.
+  const double stored_exposure = stored_lighting_->exposure_at_fit;
+  fit_response_ = FrameResponse{stored_exposure > 1.0 ? stored_exposure : 0.0, 0.0, 0.0};
+  shown_lighting_ = lighting_;  // brought into the maps' units from their next update
 }
 
 void LightsStage::writeReport(nlohmann::json& report) const {

@@ -33,6 +33,7 @@
 #include "stages/clipped_light_follower.hpp"
 #include "stages/frame_context.hpp"
 #include "stages/light_transition.hpp"
+#include "stages/frame_response.hpp"
 #include "stages/lighting_state_machine.hpp"
 #include "stages/maps_stage.hpp"
 #include "stages/pipeline_settings.hpp"
@@ -88,8 +89,20 @@ class LightsStage {
   bool recalibrating() const { return machine_.state() == AppState::kRecalibrating; }
   bool bracketPending() const { return bracket_.pending(); }
   // What the object is shaded with: the dominant light's highlight and the
-  // clipped lights.
-  const ibl::SceneLighting& sceneLighting() const { return lighting_; }
+  // clipped lights, in the maps' units (stages/frame_response.hpp: the fit
+  // frame's exposure and white balance brought to the maps' frame's), and
+  // the factor that brings the dome's irradiances there too.
+  const ibl::SceneLighting& sceneLighting() const { return shown_lighting_; }
+  // The fitted lights' per-channel factor into the maps' units (1 before
+  // a fit or the first maps, or when the camera cannot say).
+  glm::dvec3 lightsToMaps() const { return lights_to_maps_; }
+  // The response of the frame the lights in use were fitted in, for the
+  // maps' clip level (MapsStage::setLightsFittedAt); none before any
+  // lights and while recalibrating (the fit reads the 8-bit maps as shown).
+  std::optional<FrameResponse> clipReference() const {
+    if (transition_.empty() || recalibrating() || bracket_.pending()) return std::nullopt;
+    return fit_response_;
+  }
   // The dome shown at `now_s` (fading after a fit); empty before any.
   std::vector<ibl::DomeLight> domeAt(double now_s) const { return transition_.at(now_s); }
   bool haveDome() const { return !transition_.empty(); }
@@ -106,6 +119,7 @@ class LightsStage {
     ibl::RgbPixelReader read_pixel;
     std::optional<ibl::CubeMapRGB> hdr;  // a merged bracket
     ManualExposure exposure{0.0, 0.0};   // the unit of the camera-linear values (0: the source cannot say)
+    FrameResponse response;              // the same with the white balance
     bool exposure_locked = false;
   };
   // A bracket's frames, kept for the merge.
@@ -118,6 +132,7 @@ class LightsStage {
     std::chrono::steady_clock::time_point started;
     double own_s = 0.0;  // probelight's own work on the bracket's frames (the rest of the wall time is the camera's)
     double reference_time_s = NAN;  // the reference frame's time (FrameContext::time_s)
+    FrameResponse response;         // the reference frame's
   };
 
   bool startBracket(const FrameContext& ctx);
@@ -125,7 +140,9 @@ class LightsStage {
   Status fitLights(std::uint64_t frame_number, const FitFrame& fit_frame, MapsStage& maps);
   void reportWhiteBorder(const ibl::LightingFit& fit);
   void saveLighting(const ibl::LightingFit& fit, MapsStage& maps);
-  Status followClippedLights(std::uint64_t frame_number, const FrameBuffer& frame, const MapsStage& maps);
+  Status followClippedLights(std::uint64_t frame_number, const MapsStage& maps);
+  // shown_lighting_ from lighting_ and the maps' response now.
+  void showInMapsUnits(const MapsStage& maps);
   Status checkLightChange(std::uint64_t frame_number, const MapsStage& maps);
   void syncExposureLock(std::uint64_t frames_since_camera_start);
   void showStoredLighting(double now_s);
@@ -149,7 +166,12 @@ class LightsStage {
   std::unique_ptr<tracking::TagTracker> bracket_tracker_;  // follows the tag through each bracket's frames
   LightTransition transition_;
   ClippedLightFollower clipped_;
-  ibl::SceneLighting lighting_;  // no highlight until the first calibration
+  ibl::SceneLighting lighting_;  // no highlight until the first calibration; in the fit frame's units
+  ibl::SceneLighting shown_lighting_;  // lighting_ in the maps' units
+  FrameResponse fit_response_;  // the camera's response in the fit frame (0s: unknown)
+  glm::dvec3 lights_to_maps_{1.0};
+  // The maps' response when lights_fitted_e_up_ was read from them.
+  FrameResponse e_up_response_;
   std::optional<StoredLighting> stored_lighting_;
   double frame_time_s_ = 0.0;  // of the last frame the pipeline ran on
   glm::dvec3 lights_fitted_e_up_{0.0};  // the ground's irradiance when the lights were last fitted

@@ -61,6 +61,7 @@ Status MapsStage::run(FrameContext& ctx, const passes::CameraFrameTexture& frame
   if (decision.update) {
     PROBELIGHT_TRY(remake(ctx.view, frame, ctx.frame, decision.new_weight));
     maps_view_ = ctx.view;
+    maps_response_ = frameResponseOf(ctx.frame.metadata);
     ctx.maps_updated = true;
   } else {
     report_.recordStageSkip(kReflectionStageName, toString(decision.skip));
@@ -80,6 +81,9 @@ void MapsStage::skip(const std::string& reason) {
 Status MapsStage::remake(const ibl::MirrorBallView& view, const passes::CameraFrameTexture& frame,
                          const FrameBuffer& pixels, float new_weight) {
   std::string error;
+  // A blended diffuse update mixes the last maps with this frame's: in
+  // this frame's units (1 while the camera says nothing or nothing moved).
+  maps_.setPreviousDiffuseUnits(glm::vec3(responseRatio(maps_response_, frameResponseOf(pixels.metadata))));
   const bool finish_gpu = settings_.gpu_finish;
   {
     GpuStageTimer timer(report_, kReflectionStageName, finish_gpu);
@@ -108,6 +112,8 @@ Status MapsStage::mergeIntoProbe(const ibl::MirrorBallView& view, const FrameBuf
   // it as it is).
   if (pixels.metadata.exposure_us > 0.0)
     probe_->followExposure(exposureProduct(pixels.metadata.exposure_us, pixels.metadata.analogue_gain));
+  probe_->followWhiteBalance(pixels.metadata.red_gain, pixels.metadata.blue_gain);
+  maps_response_ = frameResponseOf(pixels.metadata);
   const ProbeViewCounts counts = probe_->addView(view, *map, &validity, nullptr, 1.0, &pixels);
   ++probe_views_;
   probe_frame_texels_ += counts.texels_from_frame_around_ball;
@@ -139,7 +145,12 @@ Status MapsStage::mergeIntoProbe(const ibl::MirrorBallView& view, const FrameBuf
 Status MapsStage::showProbe() {
   std::string error;
   const std::vector<float> validity = probe_->validity();
-  if (!maps_.setReflection(probe_->liveMap(), error, &validity)) return Status::runtimeFailure(error);
+  // The fit frame's clip level in the maps' units (1 while recalibrating:
+  // the fit reads the map as the 8-bit frames show it).
+  const glm::dvec3 clip_scale =
+      lights_fitted_at_ ? responseRatio(*lights_fitted_at_, maps_response_) : glm::dvec3(1.0);
+  if (!maps_.setReflection(probe_->liveMap(glm::vec3(clip_scale)), error, &validity))
+    return Status::runtimeFailure(error);
   return Status::ok();
 }
 

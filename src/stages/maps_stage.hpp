@@ -27,6 +27,7 @@
 #include "passes/camera_frame_texture.hpp"
 #include "passes/environment_maps.hpp"
 #include "stages/frame_context.hpp"
+#include "stages/frame_response.hpp"
 #include "stages/map_update_policy.hpp"
 #include "stages/pipeline_settings.hpp"
 #include "stages/probe_merge.hpp"
@@ -86,6 +87,15 @@ class MapsStage {
   // The view the current maps were made from (none before the first).
   const std::optional<ibl::MirrorBallView>& mapsView() const { return maps_view_; }
   int framesSinceUpdate() const { return policy_.framesSinceUpdate(); }
+  // The camera's response in the frame the maps were last made from: their
+  // camera-linear values are in its units (with merge_views the probe
+  // follows each merged frame's exposure; a bracket's merge keeps the
+  // probe's units). 0s before any, or from a source that cannot say.
+  const FrameResponse& mapsResponse() const { return maps_response_; }
+  // The camera's response in the frame the lights in use were fitted in
+  // (none while a recalibration runs): the probe's map shows the light
+  // below that frame's clip level, the clipped lights the rest.
+  void setLightsFittedAt(const std::optional<FrameResponse>& response) { lights_fitted_at_ = response; }
 
   // report.json: map_updates (updates by cause, skips by reason, what the
   // policy measured) and map_storage.
@@ -115,6 +125,8 @@ class MapsStage {
   passes::EnvironmentMaps maps_;
   MapUpdatePolicy policy_;
   bool have_maps_ = false;
+  FrameResponse maps_response_;
+  std::optional<FrameResponse> lights_fitted_at_;
   std::optional<ibl::MirrorBallView> maps_view_;
   std::map<std::string, long long> update_causes_;
   std::map<std::string, long long> skip_reasons_;

@@ -141,12 +141,16 @@ struct StateConfig {
 };
 
 // The virtual object passed through what the frame went through
-// (issue 19): its noise, measured on the tag's cells each frame
+// (issue 19): the camera's exposure and white balance, its noise, measured on the tag's cells each frame
 // (ibl/sensor_noise.hpp) and added to the object's pixels only
 // (stages/noise_match_stage.hpp), and its blur, measured on the tag's
 // border (ibl/edge_blur.hpp) and given to the object's edges and texture
 // (stages/blur_match_stage.hpp, passes/object_blur.hpp).
 struct CameraMatchConfig {
+  // The object's light follows the camera's exposure and white balance
+  // from the frame the maps were made in to the frame it is drawn over
+  // (stages/response_match_stage.hpp).
+  bool response = true;
   bool noise = false;
   bool blur = false;
   // As noise_smoothing_new_weight, for the edge's spread (in variance).

@@ -276,6 +276,16 @@ void ProbeMerge::followExposure(double exposure_product) {
   exposure_product_ = exposure_product;
 }
 
+void ProbeMerge::followWhiteBalance(double red_gain, double blue_gain) {
+  auto known = [](double gain) { return std::isfinite(gain) && gain > 0.0; };
+  glm::dvec3 factor(1.0);
+  if (known(red_gain) && known(red_gain_)) factor.r = red_gain / red_gain_;
+  if (known(blue_gain) && known(blue_gain_)) factor.b = blue_gain / blue_gain_;
+  if (factor != glm::dvec3(1.0)) accumulator_.scaleRadiance(factor);
+  if (known(red_gain)) red_gain_ = red_gain;
+  if (known(blue_gain)) blue_gain_ = blue_gain;
+}
+
 double ProbeMerge::toProbeExposure(double exposure_product) const {
   if (!knownExposure(exposure_product) || !knownExposure(exposure_product_)) return 1.0;
   return exposure_product_ / exposure_product;

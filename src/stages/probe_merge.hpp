@@ -60,6 +60,9 @@ class ProbeMerge {
   void followExposure(double exposure_product);
   // 0 until an exposure is known.
   double exposure() const { return exposure_product_; }
+  // The same for the white balance's red and blue gains (0: unknown), per
+  // channel: the probe's red and blue follow each frame's.
+  void followWhiteBalance(double red_gain, double blue_gain);
   // What a view at `exposure_product` is multiplied by to be in the probe's
   // units (1 when either is unknown).
   double toProbeExposure(double exposure_product) const;
@@ -67,7 +70,14 @@ class ProbeMerge {
   bool empty() const { return accumulator_.empty(); }
   // The live maps' reflection: each channel at most the clip level (what the
   // 8-bit frames show; the rest is the clipped lights', fitted apart).
-  ibl::CubeMapRGB liveMap() const { return accumulator_.radianceMap(static_cast<float>(clip_level_)); }
+  // `clip_scale`: the clip level of the frame the clipped lights were
+  // fitted in, in the probe's units now (stages/frame_response.hpp): the
+  // clipped lights carry what was above it, scaled with the exposure, so
+  // the map holds what was below it, scaled alike, and the two still add
+  // up to the light after auto exposure moved.
+  ibl::CubeMapRGB liveMap(const glm::vec3& clip_scale = glm::vec3(1.0f)) const {
+    return accumulator_.radianceMap(static_cast<float>(clip_level_) * clip_scale);
+  }
   // The whole measured radiance, brackets' highlights included.
   ibl::CubeMapRGB hdrMap() const { return accumulator_.radianceMap(); }
   std::vector<float> validity() const { return accumulator_.validity(); }
@@ -122,6 +132,7 @@ class ProbeMerge {
   static constexpr float kResolvedBySharperView = -1.0f;
   std::vector<float> bracket_confidence_;
   double exposure_product_ = 0.0;
+  double red_gain_ = 0.0, blue_gain_ = 0.0;
 };
 
 }  // namespace probelight

@@ -94,6 +94,8 @@ TEST_F(FrameRecording, EveryLayoutComesBackAsTheCameraGaveItPaddingAndMetadataIn
     frame.metadata.timestamp_ns = 123456789012345;
     frame.metadata.exposure_us = 1250.5;
     frame.metadata.analogue_gain = 2.25;
+    frame.metadata.red_gain = 1.875;
+    frame.metadata.blue_gain = 1.4375;
     frame.metadata.origin = "camera";
     std::string error;
     const std::string stem = recordedFrameStem(index++);
@@ -109,6 +111,8 @@ TEST_F(FrameRecording, EveryLayoutComesBackAsTheCameraGaveItPaddingAndMetadataIn
     EXPECT_EQ(read.metadata.timestamp_ns, frame.metadata.timestamp_ns);
     EXPECT_EQ(read.metadata.exposure_us, 1250.5);
     EXPECT_EQ(read.metadata.analogue_gain, 2.25);
+    EXPECT_EQ(read.metadata.red_gain, 1.875);
+    EXPECT_EQ(read.metadata.blue_gain, 1.4375);
     if (layout == PixelLayout::kRgb8) {
       EXPECT_EQ(read.rgb.pixels, frame.rgb.pixels);
     } else {
@@ -190,6 +194,8 @@ TEST_F(FrameRecording, DamagedFramesAreOneLineNamingTheFileAndTheField) {
       {"negative exposure", [](nlohmann::json& j) { j["exposure_us"] = -1.0; }, "field 'exposure_us': -1.0 is outside"},
       {"exposure text", [](nlohmann::json& j) { j["exposure_us"] = "fast"; }, "field 'exposure_us': not a number"},
       {"huge gain", [](nlohmann::json& j) { j["analogue_gain"] = 1e300; }, "field 'analogue_gain'"},
+      {"negative colour gain", [](nlohmann::json& j) { j["red_gain"] = -0.5; }, "field 'red_gain': -0.5 is outside"},
+      {"colour gain text", [](nlohmann::json& j) { j["blue_gain"] = "warm"; }, "field 'blue_gain': not a number"},
       {"unknown format", [](nlohmann::json& j) { j["format"] = "GREY"; }, "field 'format': \"GREY\" is not one of"},
       {"zero width", [](nlohmann::json& j) { j["width_px"] = 0; }, "field 'width_px': 0 is outside [1, 8192]"},
       {"fractional height", [](nlohmann::json& j) { j["height_px"] = 12.5; }, "field 'height_px': not a whole number"},
@@ -214,6 +220,17 @@ TEST_F(FrameRecording, DamagedFramesAreOneLineNamingTheFileAndTheField) {
     EXPECT_EQ(status.message().rfind(path + ": ", 0), 0u) << status.message();
     EXPECT_NE(status.message().find(c.expected), std::string::npos) << status.message();
     EXPECT_EQ(status.message().find('\n'), std::string::npos) << status.message();
+  }
+  // A recording from before the white balance's gains: read, gains unknown (0).
+  {
+    nlohmann::json older = good;
+    older.erase("red_gain");
+    older.erase("blue_gain");
+    writeJson(path, older);
+    FrameBuffer frame;
+    ASSERT_TRUE(readRecordedFrame(path, frame).isOk());
+    EXPECT_EQ(frame.metadata.red_gain, 0.0);
+    EXPECT_EQ(frame.metadata.blue_gain, 0.0);
   }
   // Not JSON at all; and a .raw cut short by a byte (power lost mid-write).
   std::ofstream(path) << "{\"format\": ";

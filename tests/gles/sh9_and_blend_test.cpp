@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <iostream>
 #include <optional>
 #include <tuple>
 #include <vector>
@@ -532,6 +533,47 @@ TEST_P(DiffuseBlendTest, RepeatedUpdatesConvergeToTheDeadBand) {
               method() == Method::kSH9 ? "SH9" : "blur", maps->storageDescription().c_str(), kWeight, worst_levels,
               100.0 * worst_relative, medianMs(blended_ms), medianMs(unblended_ms));
   EXPECT_LE(max_excess, 0.0);
+}
+
+// The camera's exposure and white balance moved between two updates: the
+// same room, seen 2 stops darker with red x1.3 and blue x0.8, is blended at
+// w = 0.3 with the previous map brought into the new units
+// (setPreviousDiffuseUnits), so the result is the darker room's own map, as
+// the same passes make it at weight 1. Without the units it would be
+// 0.3 x 0.25 + 0.7 = 0.78 of the old map's green, three times too bright.
+// Tolerance: both maps' storage rounding and 1% for the shader's arithmetic
+// on two slightly different inputs.
+TEST_P(DiffuseBlendTest, ThePreviousMapIsBlendedInTheNewUnits) {
+  auto maps = makeMaps();
+  if (!maps) GTEST_SKIP() << "this GPU cannot render half floats";
+  auto fresh_maps = makeMaps();
+  std::string error;
+  const int size = maps->settings().reflection_face_size;
+  const glm::vec3 units(0.25f * 1.3f, 0.25f, 0.25f * 0.8f);
+  const ibl::CubeMapRGB room = roomWithLamp(size, 1.0);
+  ibl::CubeMapRGB darker = room;
+  for (auto& face : darker.faces)
+    for (glm::vec3& texel : face) texel *= units;
+  ASSERT_TRUE(updateWith(*maps, method(), room, nullptr, 1.0f, nullptr, error)) << error;
+  maps->setPreviousDiffuseUnits(units);
+  ASSERT_TRUE(updateWith(*maps, method(), darker, nullptr, 0.3f, nullptr, error)) << error;
+  ASSERT_TRUE(updateWith(*fresh_maps, method(), darker, nullptr, 1.0f, nullptr, error)) << error;
+  const auto blended = readDiffuseState(*maps, error);
+  ASSERT_TRUE(blended) << error;
+  const auto fresh = readDiffuseState(*fresh_maps, error);
+  ASSERT_TRUE(fresh) << error;
+  const passes::CubeStorage storage = maps->storage();
+  double worst = 0.0;
+  for (int face = 0; face < ibl::kCubeFaceCount; ++face)
+    for (size_t i = 0; i < fresh->rgb.faces[face].size(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        const double want = fresh->rgb.faces[face][i][c], got = blended->rgb.faces[face][i][c];
+        const double tolerance = storageTolerance(storage, want, fresh->scale) +
+                                 storageTolerance(storage, got, blended->scale) + 0.01 * std::abs(want);
+        EXPECT_NEAR(got, want, tolerance) << "face " << face << " texel " << i << " channel " << c;
+        worst = std::max(worst, std::abs(got - want) / std::max(1e-6, std::abs(want)));
+      }
+  std::cout << "blended in the new units: worst relative difference " << worst << "\n";
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -1,7 +1,8 @@
 // The last fit's clipped lights followed between fits: each scaled by the
-// share of its texels still clipped now over the share clipped at the fit,
-// times the exposure now over the exposure then. Synthetic 4^2 maps, so every
-// expected scale follows from the rule by hand.
+// share of its texels still clipped now over the share clipped at the fit
+// (the exposure and white balance since the fit are the lights stage's:
+// stages/frame_response.hpp). Synthetic 4^2 maps, so every expected share
+// follows from the rule by hand.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -46,7 +47,7 @@ TEST(ClippedLightFollower, AStillSceneKeepsEveryLightWhole) {
   ASSERT_EQ(follower.shareAtFit().size(), 2u);
   EXPECT_DOUBLE_EQ(follower.shareAtFit()[0], 1.0);
   EXPECT_DOUBLE_EQ(follower.shareAtFit()[1], 1.0);
-  const std::vector<double> scale = follower.scalesFor(at_fit, kClip, 8000.0);
+  const std::vector<double> scale = follower.sharesFor(at_fit, kClip);
   ASSERT_EQ(scale.size(), 2u);
   EXPECT_DOUBLE_EQ(scale[0], 1.0);
   EXPECT_DOUBLE_EQ(scale[1], 1.0);
@@ -57,37 +58,35 @@ TEST(ClippedLightFollower, ALightThatLeavesItsTexelsFadesByTheirShare) {
   follower.follow(twoLights(), mapClippedAt({64, 65, 66, 67, 80, 81}), kClip, 8000.0);
   // Half the sun's texels no longer clip (a cloud over half of it); the
   // lamp's larger texel is dark (0.25 of it is left).
-  const std::vector<double> scale = follower.scalesFor(mapClippedAt({64, 65, 81}), kClip, 8000.0);
+  const std::vector<double> scale = follower.sharesFor(mapClippedAt({64, 65, 81}), kClip);
   EXPECT_DOUBLE_EQ(scale[0], 0.5);
   EXPECT_NEAR(scale[1], 0.25, 1e-7);  // shares are floats
   // Switched off altogether.
-  EXPECT_DOUBLE_EQ(follower.scalesFor(mapClippedAt({}), kClip, 8000.0)[1], 0.0);
+  EXPECT_DOUBLE_EQ(follower.sharesFor(mapClippedAt({}), kClip)[1], 0.0);
 }
 
-TEST(ClippedLightFollower, ScalesWithTheExposureAndNeverAboveWhatWasMeasured) {
+TEST(ClippedLightFollower, NeverAboveWhatWasMeasured) {
   ClippedLightFollower follower;
   // At the fit only half the sun clipped (its edge was in the map's range).
   follower.follow(twoLights(), mapClippedAt({64, 65, 80, 81}), kClip, 8000.0);
   EXPECT_DOUBLE_EQ(follower.shareAtFit()[0], 0.5);
-  // Now all of it clips (the sun is no brighter for that: the share is
-  // capped at the fit's), and auto exposure doubled the exposure: the maps,
-  // in the camera's linear units, read twice what they did for the same
-  // light, and the clipped lights, measured in those units, follow them.
-  const std::vector<double> scale = follower.scalesFor(mapClippedAt({64, 65, 66, 67, 80, 81}), kClip, 16000.0);
-  EXPECT_DOUBLE_EQ(scale[0], 2.0);
-  EXPECT_DOUBLE_EQ(scale[1], 2.0);
+  // Now all of it clips (auto exposure lengthened, say): the sun is no
+  // brighter for that, so the share is capped at the fit's.
+  const std::vector<double> share = follower.sharesFor(mapClippedAt({64, 65, 66, 67, 80, 81}), kClip);
+  EXPECT_DOUBLE_EQ(share[0], 1.0);
+  EXPECT_DOUBLE_EQ(share[1], 1.0);
 }
 
 TEST(ClippedLightFollower, ALightNothingOfWhichClippedAtTheFitCannotBeFollowed) {
   ClippedLightFollower follower;
-  // Stored lighting from an older file: no shares. Each light keeps scale 1
-  // but for the exposure.
+  // Stored lighting from an older file: no shares. Each light keeps share 1.
   follower.restore(twoLights(), {}, 4000.0);
   ASSERT_EQ(follower.shareAtFit().size(), 2u);
   EXPECT_DOUBLE_EQ(follower.shareAtFit()[1], 0.0);
-  const std::vector<double> scale = follower.scalesFor(mapClippedAt({}), kClip, 2000.0);
-  EXPECT_DOUBLE_EQ(scale[0], 0.5);
-  EXPECT_DOUBLE_EQ(scale[1], 0.5);
+  EXPECT_DOUBLE_EQ(follower.exposureAtFit(), 4000.0);
+  const std::vector<double> share = follower.sharesFor(mapClippedAt({}), kClip);
+  EXPECT_DOUBLE_EQ(share[0], 1.0);
+  EXPECT_DOUBLE_EQ(share[1], 1.0);
 }
 
 // Texels a sharper view than the fit's bracket resolved (it showed them

@@ -60,7 +60,9 @@ TEST_P(EdgeBlurAtSetting, IsTheSimulatedLensBlurWithThePixelsArea) {
     // none from 1 px on).
     EXPECT_NEAR(m.reading.edge_sigma_px, m.truth_edge_sigma_px, 0.07) << "frame " << frame;
     // The blur besides the pixel's area, where it is not lost in it.
-    if (GetParam() >= 1.0) EXPECT_NEAR(m.reading.lens_sigma_px, m.truth_lens_sigma_px, 0.05) << "frame " << frame;
+    if (GetParam() >= 1.0) {
+      EXPECT_NEAR(m.reading.lens_sigma_px, m.truth_lens_sigma_px, 0.05) << "frame " << frame;
+    }
   }
 }
 
