@@ -73,6 +73,37 @@ TEST(ProbeMerge, FollowsTheCameraExposureAndIgnoresExposuresItCannotKnow) {
   EXPECT_FLOAT_EQ(high, 0.6f);
 }
 
+// The white balance's red and blue gains move the probe's red and blue as
+// the exposure moves all three; the first known gains only name the units,
+// and gains a source cannot say move nothing.
+TEST(ProbeMerge, FollowsTheWhiteBalancePerChannel) {
+  ProbeMerge probe(ibl::CameraTransfer{}, rig(), kFace);
+  probe.followWhiteBalance(2.0, 1.5);  // names the units
+  probe.addView(kioskView(), uniformMap(0.3f), nullptr, nullptr, 1.0, nullptr);
+  const std::vector<float> validity = probe.validity();
+  auto texelAt = [&](const ibl::CubeMapRGB& map) {
+    for (std::size_t i = 0; i < validity.size(); ++i)
+      if (validity[i] != 0.0f) return map.faces[i / (kFace * kFace)][i % (kFace * kFace)];
+    return glm::vec3(-1.0f);
+  };
+  probe.followWhiteBalance(3.0, 0.75);  // red x1.5, blue x0.5
+  glm::vec3 texel = texelAt(probe.hdrMap());
+  EXPECT_FLOAT_EQ(texel.r, 0.45f);
+  EXPECT_FLOAT_EQ(texel.g, 0.3f);
+  EXPECT_FLOAT_EQ(texel.b, 0.15f);
+  for (double unknown : {0.0, -1.0, static_cast<double>(NAN)}) probe.followWhiteBalance(unknown, unknown);
+  texel = texelAt(probe.hdrMap());
+  EXPECT_FLOAT_EQ(texel.r, 0.45f);
+  EXPECT_FLOAT_EQ(texel.b, 0.15f);
+  // The live map's clip can be moved per channel (the fit frame's clip in
+  // today's units): each channel stops at its own.
+  const glm::vec3 clip_scale(0.4f / static_cast<float>(probe.clipLevel()), 1.0f, 0.1f / static_cast<float>(probe.clipLevel()));
+  texel = texelAt(probe.liveMap(clip_scale));
+  EXPECT_FLOAT_EQ(texel.r, 0.4f);
+  EXPECT_FLOAT_EQ(texel.g, 0.3f);
+  EXPECT_FLOAT_EQ(texel.b, 0.1f);
+}
+
 TEST(ProbeMerge, TheLiveMapStopsAtTheClipAndTheFitGetsTheMeasuredHighlights) {
   ProbeMerge probe(ibl::CameraTransfer{}, rig(), kFace);
   const float clip = static_cast<float>(probe.clipLevel());
