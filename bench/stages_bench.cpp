@@ -53,6 +53,7 @@
 #include "passes/camera_frame_texture.hpp"
 #include "passes/environment_maps.hpp"
 #include "passes/ground_shadow.hpp"
+#include "passes/object_bloom.hpp"
 #include "passes/object_blur.hpp"
 #include "passes/object_compositor.hpp"
 #include "sim/occluder.hpp"
@@ -795,6 +796,10 @@ struct RenderRig {
   double blur_sigma_px = 0.0;
   const passes::SensorNoiseMatch* blur_noise = nullptr;
   const passes::SensorNoiseTexture* blur_noise_texture = nullptr;
+  // With `bloom`, the sphere's light beyond white spread around it (the
+  // compose stage with camera_match.bloom, when the bound says it can
+  // exceed white): a bright pass of the sphere, then the glare's passes.
+  passes::ObjectBloom* bloom = nullptr;
   bool draw(std::string& error) {
     Setup& s = setup();
     ibl::SurfaceMaterial material;
@@ -813,9 +818,44 @@ struct RenderRig {
     if (!compositor.drawSphereObject(s.scene.camera, s.frames[0].truth.pose, centre, 0.035, material, lighting, maps,
                                      error))
       return false;
-    return blur == nullptr || blur->composite(blur_noise, blur_noise_texture, error);
+    if (blur != nullptr && !blur->composite(blur_noise, blur_noise_texture, error)) return false;
+    if (bloom == nullptr) return true;
+    bloom->beginBrightPass(passes::projectedBounds(s.scene.camera, s.frames[0].truth.pose, centre - glm::dvec3(0.035),
+                                                   centre + glm::dvec3(0.035), 0.01, 2));
+    compositor.setBloomBrightPass(true);
+    const bool drawn = compositor.drawSphereObject(s.scene.camera, s.frames[0].truth.pose, centre, 0.035, material,
+                                                   lighting, maps, error);
+    compositor.setBloomBrightPass(false);
+    if (!drawn) {
+      bloom->restore();
+      return false;
+    }
+    return bloom->composite(error);
   }
 };
+
+// The sphere with its bloom (0.5 degrees of glare, camera_match.bloom's
+// default): its cost over render/640x480 is the bright pass and the glare.
+void renderFrameWithBloom(benchmark::State& state) {
+  if (!requireGl(state)) return;
+  RenderRig rig;
+  std::string error;
+  passes::ObjectBloom bloom;
+  const CameraIntrinsics& camera = setup().scene.camera;
+  if (!rig.init(error) || !bloom.init(camera.width_px, camera.height_px,
+                                      camera.fx_px * std::tan(0.5 * M_PI / 180.0), ibl::CameraTransfer{}, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  rig.bloom = &bloom;
+  for (auto _ : state) {
+    if (!rig.draw(error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    glFinish();
+  }
+}
 
 // With `match_noise`, the frame's noise added to the sphere (the compose
 // stage with camera_match.noise); with `match_blur` too, the sphere through
@@ -1463,6 +1503,10 @@ void registerAll() {
       ->UseRealTime()
       ->MinTime(kMinTime);
   benchmark::RegisterBenchmark("render/640x480/match_noise", [](benchmark::State& state) { renderFrame(state, true); })
+      ->Unit(kMillisecond)
+      ->UseRealTime()
+      ->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("render/640x480/bloom", renderFrameWithBloom)
       ->Unit(kMillisecond)
       ->UseRealTime()
       ->MinTime(kMinTime);

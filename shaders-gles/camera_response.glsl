@@ -36,6 +36,15 @@ vec3 sensorNoise(vec3 encoded) {
 // channel: 1 while they have not moved.
 uniform vec3 u_response_gain_rgb;
 
+#ifdef BLOOM_BRIGHT_PASS
+// The bloom's bright pass (passes/object_bloom): the light beyond white,
+// e = max(light - 1, 0), stored as sqrt(e / BLOOM_RANGE) (object_bloom.frag
+// decodes it).
+vec3 cameraOutput(vec3 linear) {
+  vec3 beyond_white = max(linear * u_response_gain_rgb - 1.0, 0.0);
+  return sqrt(clamp(beyond_white / BLOOM_RANGE, 0.0, 1.0));
+}
+#else
 // The encoded colour the camera would have written for `linear` (in the
 // units of the object's light).
 vec3 cameraOutput(vec3 linear) {
@@ -45,3 +54,4 @@ vec3 cameraOutput(vec3 linear) {
 #endif
   return encoded;
 }
+#endif

@@ -219,6 +219,9 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.camera_match.blur_smoothing_new_weight =
       camera_match.readDouble("blur_smoothing_new_weight", settings.camera_match.blur_smoothing_new_weight,
                               Range::openClosed(0.0, 1.0));
+  settings.camera_match.bloom = camera_match.readBool("bloom", settings.camera_match.bloom);
+  settings.camera_match.bloom_sigma_deg =
+      camera_match.readDouble("bloom_sigma_deg", settings.camera_match.bloom_sigma_deg, Range::openClosed(0.0, 10.0));
   camera_match.rejectUnknownFields();
 
   ConfigReader sim = file.section("sim");

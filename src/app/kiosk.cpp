@@ -1,6 +1,7 @@
 #include "app/kiosk.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -444,6 +445,11 @@ class Kiosk {
     shadows_ = std::make_unique<ShadowsStage>(settings, object.shape, report_);
     compose_ = std::make_unique<ComposeStage>(object, inputs_.camera, inputs_.rig, settings.maps.stages.camera_transfer,
                                               report_, settings.gpu_finish);
+    if (settings.camera_match.bloom) {
+      // The lens's glare spread, from degrees of the field to the frame's pixels.
+      const double sigma_rad = settings.camera_match.bloom_sigma_deg * M_PI / 180.0;
+      compose_->setBloom(inputs_.camera.fx_px * std::tan(sigma_rad));
+    }
     response_ = std::make_unique<ResponseMatchStage>(settings.camera_match, report_);
     noise_ = std::make_unique<NoiseMatchStage>(settings.camera_match, inputs_.camera, inputs_.rig, report_);
     blur_ = std::make_unique<BlurMatchStage>(settings.camera_match, inputs_.camera, inputs_.rig,

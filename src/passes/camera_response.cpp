@@ -21,6 +21,10 @@ std::string cameraResponseDefines(const ibl::CameraTransfer& transfer, bool matc
   return cameraTransferDefines(transfer) + (match_noise ? "#define MATCH_SENSOR_NOISE\n" : "");
 }
 
+std::string bloomBrightPassDefines() {
+  return "#define BLOOM_BRIGHT_PASS\n#define BLOOM_RANGE " + std::to_string(kBloomRange) + "\n";
+}
+
 std::vector<std::uint8_t> standardNormalTexels(int size_px, std::uint32_t seed) {
   std::mt19937 generator(seed);
   std::normal_distribution<double> normal(0.0, 1.0);

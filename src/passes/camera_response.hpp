@@ -28,6 +28,12 @@ struct SensorNoiseMatch {
 std::string cameraTransferDefines(const ibl::CameraTransfer& transfer);
 std::string cameraResponseDefines(const ibl::CameraTransfer& transfer, bool match_noise);
 
+// The bloom's bright pass (passes/object_bloom.hpp): an object program
+// built with these after cameraResponseDefines writes its light beyond
+// white, sqrt((light - 1) / kBloomRange), instead of its colour.
+constexpr double kBloomRange = 16.0;
+std::string bloomBrightPassDefines();
+
 // The noise samples: kSizePx^2 RGBA texels, each channel an independent
 // N(0, 1) value stored as round-down(128 + 32 z) (clamped to the byte: |z|
 // under 4), which decodes as (code - 127.5) / 32, z to the nearest 1/32

@@ -362,7 +362,8 @@ const gles::Program* ModelRenderer::programFor(const Piece& piece, int rung_firs
                                                int self_shadow_lights, int self_shadow_floor, bool floor_shadow,
                                                bool floor_camera, bool noise_in_shader, std::string& error) {
   std::string defines = cubeStorageDefines(storage_) +
-                        cameraResponseDefines(settings_.camera_transfer, noise_in_shader) + piece.defines +
+                        cameraResponseDefines(settings_.camera_transfer, noise_in_shader) +
+                        (bloom_bright_pass_ ? bloomBrightPassDefines() : std::string()) + piece.defines +
                         "#define GLOSSY_LEVELS " +
                         std::to_string(glossy_levels) + "\n#define RUNG_FIRST " + std::to_string(rung_first) +
                         "\n#define RUNG_LAST " + std::to_string(rung_last) + "\n";
@@ -443,7 +444,8 @@ bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld&
     error = "ModelRenderer: initialised for a different cube map storage than these EnvironmentMaps use";
     return false;
   }
-  if (sensor_noise_ != nullptr && !noise_texture_.valid() && !noise_texture_.init(error)) return false;
+  if (sensor_noise_ != nullptr && !bloom_bright_pass_ && !noise_texture_.valid() && !noise_texture_.init(error))
+    return false;
   dome_rgb_scale_ = lighting.dome_rgb_scale;
   const int glossy_levels = environment.glossyWritten() ? std::clamp(environment.glossyLevels(), 0, 2) : 0;
   std::vector<double> exponents;
@@ -461,11 +463,15 @@ bool ModelRenderer::draw(const CameraIntrinsics& camera, const PoseCamFromWorld&
   });
 
   // The framebuffer's own samples decide first (kMultisampleConfig): a
-  // multisampled target needs no layer.
-  GLint target_samples = 0;
-  glGetIntegerv(GL_SAMPLES, &target_samples);
-  if (!prepareEdges(camera.width_px, camera.height_px, target_samples, error)) return false;
-  const bool layered = stats_.edges.usesLayer();
+  // multisampled target needs no layer. The bloom's bright pass is drawn
+  // straight into its own target (its light is blurred far beyond an edge).
+  bool layered = false;
+  if (!bloom_bright_pass_) {
+    GLint target_samples = 0;
+    glGetIntegerv(GL_SAMPLES, &target_samples);
+    if (!prepareEdges(camera.width_px, camera.height_px, target_samples, error)) return false;
+    layered = stats_.edges.usesLayer();
+  }
   if (layered) {
     // 2 px of margin: the GPU's fp32 projection against the CPU's double,
     // and the bow of the distorted outline between its samples.
@@ -563,7 +569,7 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
   for (bool used : piece.slot_used) units_used += used ? 1 : 0;
   // The frame's noise, before the self-shadow lights: it is the whole
   // model's grain, against one of eight lights' shadows.
-  const bool noise_in_shader = sensor_noise_ != nullptr && noise_texture_.valid() &&
+  const bool noise_in_shader = !bloom_bright_pass_ && sensor_noise_ != nullptr && noise_texture_.valid() &&
                                !(stats_.edges.usesLayer() && edge_layer_.addsNoiseAfterResolve()) &&
                                units_used < capabilities_.max_fragment_texture_units;
   units_used += noise_in_shader ? 1 : 0;

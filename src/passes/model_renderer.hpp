@@ -142,6 +142,9 @@ class ModelRenderer {
   // the model's linear colour is multiplied by as it leaves
   // (camera_response.glsl).
   void setResponseGain(const glm::vec3& gain_rgb) { response_gain_rgb_ = gain_rgb; }
+  // true: draw() writes the model's light beyond white for the bloom
+  // (passes/object_bloom.hpp), straight into the bound target, no noise.
+  void setBloomBrightPass(bool on) { bloom_bright_pass_ = on; }
 
   // Chooses the edge anti-aliasing for frames of width_px x height_px drawn
   // into a framebuffer with target_samples (GL_SAMPLES; 0 single-sampled)
@@ -209,6 +212,7 @@ class ModelRenderer {
   NearFloor near_floor_;
   const SensorNoiseMatch* sensor_noise_ = nullptr;
   glm::vec3 response_gain_rgb_{1.0f};
+  bool bloom_bright_pass_ = false;
   glm::vec3 dome_rgb_scale_{1.0f};  // the draw's SceneLighting::dome_rgb_scale
   SensorNoiseTexture noise_texture_;  // made on the first draw with noise
   ModelUploadStats stats_;

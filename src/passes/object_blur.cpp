@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "passes/layer_target.hpp"
+
 namespace probelight::passes {
 
 double objectBlurSigmaPx(double frame_edge_sigma_px, double object_edge_variance_px2) {
@@ -53,35 +55,15 @@ bool ObjectBlurLayer::init(int width_px, int height_px, const ibl::CameraTransfe
   width_px_ = width_px;
   height_px_ = height_px;
   camera_transfer_ = camera_transfer;
-  auto make = [&](gles::Texture& texture, gles::Framebuffer& framebuffer, bool with_depth) {
-    auto made = gles::createTexture2D(width_px, height_px, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, nullptr, error);
-    if (!made) return false;
-    texture = std::move(*made);
-    framebuffer = gles::Framebuffer::create();
-    GLint previous = 0;
-    glGetIntegerv(GL_FRAMEBUFFER_BINDING, &previous);
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer.id());
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture.id(), 0);
-    if (with_depth) glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.id());
-    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
-    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(previous));
-    if (status != GL_FRAMEBUFFER_COMPLETE) {
-      error = "ObjectBlurLayer " + std::to_string(width_px) + "x" + std::to_string(height_px) +
-              " is incomplete: " + gles::framebufferStatusName(status);
-      return false;
-    }
-    return true;
-  };
-  depth_ = gles::Renderbuffer::create();
-  glBindRenderbuffer(GL_RENDERBUFFER, depth_.id());
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT16, width_px, height_px);
-  glBindRenderbuffer(GL_RENDERBUFFER, 0);
+  depth_ = makeDepthRenderbuffer(width_px, height_px);
   // RGB: glCopyTexSubImage2D takes it from any colour buffer (a display's
   // may have no alpha).
   auto base = gles::createTexture2D(width_px, height_px, GL_RGB, GL_UNSIGNED_BYTE, GL_NEAREST, nullptr, error);
   if (!base) return false;
   base_ = std::move(*base);
-  if (!make(layer_, layer_framebuffer_, true) || !make(horizontal_, horizontal_framebuffer_, false)) return false;
+  if (!makeColourLayer(width_px, height_px, &depth_, "ObjectBlurLayer", layer_, layer_framebuffer_, error) ||
+      !makeColourLayer(width_px, height_px, nullptr, "ObjectBlurLayer", horizontal_, horizontal_framebuffer_, error))
+    return false;
   glBindTexture(GL_TEXTURE_2D, 0);
   if (!quad_.init(error)) return false;
   return gles::checkGl("ObjectBlurLayer::init", error);

@@ -66,8 +66,8 @@ bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const Ob
   // The mirror-only programs (glossiness 1, the default) now, so a shader
   // that does not build fails init; other rungs' programs on first use.
   shading_programs_.clear();
-  if (!shadingProgram(ObjectShape::kSphere, ReflectionRungs{}, false, error) ||
-      !shadingProgram(ObjectShape::kMesh, ReflectionRungs{}, false, error))
+  if (!shadingProgram(ObjectShape::kSphere, ReflectionRungs{}, false, false, error) ||
+      !shadingProgram(ObjectShape::kMesh, ReflectionRungs{}, false, false, error))
     return false;
 
   sphere_meshes_.clear();
@@ -117,10 +117,12 @@ bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const Ob
 }
 
 const gles::Program* ObjectCompositor::shadingProgram(ObjectShape shape, const ReflectionRungs& rungs,
-                                                     bool match_noise, std::string& error) {
-  const auto key = std::make_tuple(shape, rungs.lower_kind, rungs.upper_kind, match_noise);
+                                                     bool match_noise, bool bloom_bright_pass, std::string& error) {
+  match_noise = match_noise && !bloom_bright_pass;
+  const auto key = std::make_tuple(shape, rungs.lower_kind, rungs.upper_kind, match_noise, bloom_bright_pass);
   if (auto found = shading_programs_.find(key); found != shading_programs_.end()) return &found->second;
   std::string defines = cubeStorageDefines(storage_) + cameraResponseDefines(settings_.camera_transfer, match_noise) +
+                        (bloom_bright_pass ? bloomBrightPassDefines() : std::string()) +
                         "#define REFLECTION_LOWER_RUNG " + std::to_string(rungs.lower_kind) + "\n";
   if (rungs.upper_kind >= 0) defines += "#define REFLECTION_UPPER_RUNG " + std::to_string(rungs.upper_kind) + "\n";
   auto program = gles::Program::fromEmbedded(shape == ObjectShape::kSphere ? "sphere_object.vert" : "mesh_object.vert",
@@ -160,7 +162,7 @@ const gles::Program* ObjectCompositor::prepareShading(ObjectShape shape, const C
   const int glossy_levels = environment.glossyWritten() ? environment.glossyLevels() : 0;
   const ReflectionRungs rungs = reflectionRungsFor(material.glossiness, glossy_levels);
   if (sensor_noise_ != nullptr && !noise_texture_.valid() && !noise_texture_.init(error)) return nullptr;
-  const gles::Program* shading = shadingProgram(shape, rungs, sensor_noise_ != nullptr, error);
+  const gles::Program* shading = shadingProgram(shape, rungs, sensor_noise_ != nullptr, bloom_bright_pass_, error);
   if (shading == nullptr) return nullptr;
   const gles::Program& program = *shading;
   const GpuCubeMap& diffuse = environment.diffuse();
@@ -175,7 +177,8 @@ const gles::Program* ObjectCompositor::prepareShading(ObjectShape shape, const C
     bindCubeMapUniforms(program, "u_glossy" + std::to_string(level),
                         level < glossy_levels ? environment.glossy(level) : diffuse, 2 + level);
   glUniform1f(program.uniform("u_toward_upper_rung"), rungs.toward_upper);
-  setCameraResponseUniforms(program, settings_.camera_transfer, response_gain_rgb_, sensor_noise_, noise_texture_, 4);
+  setCameraResponseUniforms(program, settings_.camera_transfer, response_gain_rgb_,
+                            bloom_bright_pass_ ? nullptr : sensor_noise_, noise_texture_, 4);
   glActiveTexture(GL_TEXTURE0);
 
   glUniform3fv(program.uniform("u_albedo"), 1, glm::value_ptr(material.albedo));

@@ -88,6 +88,9 @@ class ObjectCompositor {
   // the object's linear colour is multiplied by as it leaves
   // (camera_response.glsl).
   void setResponseGain(const glm::vec3& gain_rgb) { response_gain_rgb_ = gain_rgb; }
+  // true: the draws write the object's light beyond white for the bloom
+  // (passes/object_bloom.hpp, bloomBrightPassDefines), with no noise.
+  void setBloomBrightPass(bool on) { bloom_bright_pass_ = on; }
 
   // Blends straight-alpha RGBA (top row first, sRGB bytes) over the whole viewport.
   bool drawOverlayRGBA(const std::uint8_t* rgba, int width, int height, std::string& error);
@@ -102,16 +105,18 @@ class ObjectCompositor {
                                       EnvironmentMaps& environment, std::string& error);
 
   // The shading program for a shape, the ladder's rungs
-  // (reflectionRungsFor) and whether it adds noise, built on first use and kept.
+  // (reflectionRungsFor), whether it adds noise and whether it is the
+  // bloom's bright pass (then no noise), built on first use and kept.
   const gles::Program* shadingProgram(ObjectShape shape, const ReflectionRungs& rungs, bool match_noise,
-                                      std::string& error);
+                                      bool bloom_bright_pass, std::string& error);
 
   ObjectCompositorSettings settings_;
   CubeStorage storage_ = CubeStorage::kSrgb8;
   gles::Program image_program_;
-  std::map<std::tuple<ObjectShape, int, int, bool>, gles::Program> shading_programs_;
+  std::map<std::tuple<ObjectShape, int, int, bool, bool>, gles::Program> shading_programs_;
   const SensorNoiseMatch* sensor_noise_ = nullptr;
   glm::vec3 response_gain_rgb_{1.0f};
+  bool bloom_bright_pass_ = false;
   SensorNoiseTexture noise_texture_;  // made on the first frame with noise
   gles::Buffer mesh_vertices_;
   gles::FullScreenQuad quad_;

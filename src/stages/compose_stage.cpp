@@ -4,6 +4,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "stages/bloom_bound.hpp"
 #include "stages/gpu_stage_timer.hpp"
 
 namespace probelight {
@@ -133,12 +134,7 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
       blur_layer_.beginObject(region,
                               passes::objectBlurSigmaPx(*blur_edge_sigma_px_, antialiased ? 1.0 / 12.0 : 0.0));
     }
-    const bool drawn =
-        object_.isModel() ? model_renderer_.draw(camera_, track.pose, lighting, maps.maps(), error)
-        : mesh_.empty()
-            ? compositor_.drawSphereObject(camera_, track.pose, object_.shape.boundingCentre(), object_.shape.radius_m,
-                                           object_.material, lighting, maps.maps(), error)
-            : compositor_.drawMeshObject(camera_, track.pose, mesh_, object_.material, lighting, maps.maps(), error);
+    const bool drawn = drawObject(track, maps, lighting, error);
     if (!drawn) {
       if (blurred) blur_layer_.restore();
       return Status::runtimeFailure(error);
@@ -151,11 +147,62 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
       if (nlohmann::json& reported = report_.extra["model"]["edges"]; reported != edges) reported = std::move(edges);
     }
   }
+  PROBELIGHT_TRY(drawBloom(object_drawn, track, maps, lighting));
   if (!status.empty()) {
     const auto& rgba = overlay_.render(status, camera_.width_px, camera_.height_px);
     if (!compositor_.drawOverlayRGBA(rgba.data(), camera_.width_px, camera_.height_px, error))
       return Status::runtimeFailure(error);
   }
+  return Status::ok();
+}
+
+bool ComposeStage::drawObject(const tracking::TagTrackResult& track, MapsStage& maps,
+                              const ibl::SceneLighting& lighting, std::string& error) {
+  if (object_.isModel()) return model_renderer_.draw(camera_, track.pose, lighting, maps.maps(), error);
+  if (mesh_.empty())
+    return compositor_.drawSphereObject(camera_, track.pose, object_.shape.boundingCentre(), object_.shape.radius_m,
+                                        object_.material, lighting, maps.maps(), error);
+  return compositor_.drawMeshObject(camera_, track.pose, mesh_, object_.material, lighting, maps.maps(), error);
+}
+
+Status ComposeStage::drawBloom(bool object_drawn, const tracking::TagTrackResult& track, MapsStage& maps,
+                               const ibl::SceneLighting& lighting) {
+  if (!bloom_sigma_px_) {
+    report_.recordStageSkip(kBloomStageName, "off");
+    return Status::ok();
+  }
+  if (!object_drawn) {
+    report_.recordStageSkip(kBloomStageName, "no_object");
+    return Status::ok();
+  }
+  if (!(objectLightBound(object_, lighting, maps.reflectionPeak(), response_gain_rgb_) > 1.0)) {
+    report_.recordStageSkip(kBloomStageName, "nothing_above_white");
+    return Status::ok();
+  }
+  const glm::dvec3 centre = object_.shape.boundingCentre();
+  const glm::dvec3 half(object_.shape.boundingRadius());
+  const passes::PixelRect region = passes::projectedBounds(camera_, track.pose, centre - half, centre + half, 0.01,
+                                                           /*margin_px=*/2);
+  if (region.empty()) {
+    report_.recordStageSkip(kBloomStageName, "not_in_view");
+    return Status::ok();
+  }
+  GpuStageTimer timer(report_, kBloomStageName, finish_gpu_);
+  std::string error;
+  if (!bloom_.ready(camera_.width_px, camera_.height_px, *bloom_sigma_px_) &&
+      !bloom_.init(camera_.width_px, camera_.height_px, *bloom_sigma_px_, camera_transfer_, error))
+    return Status::runtimeFailure("GPU set-up failed for the object's bloom: " + error);
+  bloom_.beginBrightPass(region);
+  compositor_.setBloomBrightPass(true);
+  model_renderer_.setBloomBrightPass(true);
+  const bool drawn = drawObject(track, maps, lighting, error);
+  compositor_.setBloomBrightPass(false);
+  model_renderer_.setBloomBrightPass(false);
+  if (!drawn) {
+    bloom_.restore();
+    return Status::runtimeFailure(error);
+  }
+  if (!bloom_.composite(error)) return Status::runtimeFailure(error);
   return Status::ok();
 }
 

@@ -16,6 +16,7 @@
 #include "ibl/surface_shading.hpp"
 #include "passes/camera_frame_texture.hpp"
 #include "passes/model_renderer.hpp"
+#include "passes/object_bloom.hpp"
 #include "passes/object_blur.hpp"
 #include "passes/object_compositor.hpp"
 #include "stages/maps_stage.hpp"
@@ -67,13 +68,31 @@ class ComposeStage {
   // frame (stages/response_match_stage.hpp), per channel, for the object
   // drawn from now on.
   void setResponseGain(const glm::dvec3& gain_rgb) {
+    response_gain_rgb_ = gain_rgb;
     compositor_.setResponseGain(glm::vec3(gain_rgb));
     model_renderer_.setResponseGain(glm::vec3(gain_rgb));
   }
+  // The lens's glare around the object's light above white
+  // (passes/object_bloom.hpp), spread by sigma_px; none: no bloom. The
+  // stage `bloom` runs when the object's light can exceed white
+  // (stages/bloom_bound.hpp) and skips otherwise (nothing_above_white,
+  // no_object, off).
+  void setBloom(std::optional<double> sigma_px) { bloom_sigma_px_ = sigma_px; }
   // The display still holds what was drawn last: shown again, not drawn.
-  void skip(const std::string& reason) { report_.recordStageSkip(kStageName, reason); }
+  void skip(const std::string& reason) {
+    report_.recordStageSkip(kStageName, reason);
+    report_.recordStageSkip(kBloomStageName, reason);
+  }
+  static constexpr const char* kBloomStageName = "bloom";
 
  private:
+  // The object (sphere, box or model) into the bound framebuffer.
+  bool drawObject(const tracking::TagTrackResult& track, MapsStage& maps, const ibl::SceneLighting& lighting,
+                  std::string& error);
+  // After the object: its light above white spread around it, or a skip.
+  Status drawBloom(bool object_drawn, const tracking::TagTrackResult& track, MapsStage& maps,
+                   const ibl::SceneLighting& lighting);
+
   SceneObject object_;
   CameraIntrinsics camera_;
   RigGeometry rig_;
@@ -84,6 +103,9 @@ class ComposeStage {
   passes::ModelRenderer model_renderer_;  // for a model
   const passes::SensorNoiseMatch* noise_ = nullptr;
   std::optional<double> blur_edge_sigma_px_;
+  glm::dvec3 response_gain_rgb_{1.0};
+  std::optional<double> bloom_sigma_px_;
+  passes::ObjectBloom bloom_;  // made on the first frame that blooms
   passes::ObjectBlurLayer blur_layer_;      // made on the first blurred frame
   passes::SensorNoiseTexture noise_texture_;  // the blur layer's, made on first use
   std::vector<passes::ObjectCompositor::MeshVertex> mesh_;  // a box's triangles (empty for a sphere)

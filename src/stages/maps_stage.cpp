@@ -1,5 +1,6 @@
 #include "stages/maps_stage.hpp"
 
+#include <algorithm>
 #include <vector>
 
 #include "ibl/glossy_maps.hpp"
@@ -22,6 +23,14 @@ const char* statusFor(MapSkipReason skip) {
     case MapSkipReason::kBallDark: return "Mirror ball image all black (covered?): lighting kept";
     default: return nullptr;
   }
+}
+
+// The largest channel value of a map (what the object can reflect at most).
+double largestChannel(const ibl::CubeMapRGB& map) {
+  float peak = 0.0f;
+  for (const auto& face : map.faces)
+    for (const glm::vec3& texel : face) peak = std::max({peak, texel.r, texel.g, texel.b});
+  return peak;
 }
 
 }  // namespace
@@ -89,6 +98,8 @@ Status MapsStage::remake(const ibl::MirrorBallView& view, const passes::CameraFr
     GpuStageTimer timer(report_, kReflectionStageName, finish_gpu);
     if (!maps_.updateReflection(frame, view, probe_reflectance_, error)) return Status::runtimeFailure(error);
   }
+  // The frame's 8-bit white through the ball (until the probe says more exactly).
+  reflection_peak_ = 1.0 / probe_reflectance_;
   if (!probe_) return remakeFromReflection(new_weight);
   bool diffuse_due = true, glossy_due = true;
   PROBELIGHT_TRY(mergeIntoProbe(view, pixels, diffuse_due, glossy_due));
@@ -149,8 +160,9 @@ Status MapsStage::showProbe() {
   // the fit reads the map as the 8-bit frames show it).
   const glm::dvec3 clip_scale =
       lights_fitted_at_ ? responseRatio(*lights_fitted_at_, maps_response_) : glm::dvec3(1.0);
-  if (!maps_.setReflection(probe_->liveMap(glm::vec3(clip_scale)), error, &validity))
-    return Status::runtimeFailure(error);
+  const ibl::CubeMapRGB live = probe_->liveMap(glm::vec3(clip_scale));
+  if (!maps_.setReflection(live, error, &validity)) return Status::runtimeFailure(error);
+  reflection_peak_ = largestChannel(live);
   return Status::ok();
 }
 
@@ -198,6 +210,7 @@ Status MapsStage::setProbe(const ibl::CubeMapRGB& map, const std::vector<float>&
     GpuStageTimer timer(report_, kReflectionStageName, settings_.gpu_finish);
     if (!maps_.setReflection(map, error, &validity)) return Status::runtimeFailure(error);
   }
+  reflection_peak_ = largestChannel(map);
   return remakeFromReflection(1.0f);
 }
 

@@ -96,6 +96,10 @@ class MapsStage {
   // (none while a recalibration runs): the probe's map shows the light
   // below that frame's clip level, the clipped lights the rest.
   void setLightsFittedAt(const std::optional<FrameResponse>& response) { lights_fitted_at_ = response; }
+  // The reflection map's largest channel value (its other maps are means
+  // of it): the probe's, as uploaded; a map made on the GPU from one frame
+  // holds at most the 8-bit white through the ball's reflectance.
+  double reflectionPeak() const { return reflection_peak_; }
 
   // report.json: map_updates (updates by cause, skips by reason, what the
   // policy measured) and map_storage.
@@ -127,6 +131,7 @@ class MapsStage {
   bool have_maps_ = false;
   FrameResponse maps_response_;
   std::optional<FrameResponse> lights_fitted_at_;
+  double reflection_peak_ = 0.0;
   std::optional<ibl::MirrorBallView> maps_view_;
   std::map<std::string, long long> update_causes_;
   std::map<std::string, long long> skip_reasons_;

@@ -160,6 +160,11 @@ struct CameraMatchConfig {
   // sqrt(weight / (2 - weight)), to 1% at 0.3, and a change of sensor gain
   // is followed within a few frames.
   double noise_smoothing_new_weight = 0.3;
+  // The lens's glare around the object's light above white
+  // (passes/object_bloom.hpp): a Gaussian of this spread, in degrees of
+  // the field of view (a property of the lens, whatever the resolution).
+  bool bloom = false;
+  double bloom_sigma_deg = 0.5;
 };
 
 struct PipelineSettings {

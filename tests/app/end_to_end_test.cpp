@@ -1169,5 +1169,68 @@ TEST_F(EndToEndResponse, TheObjectFollowsAutoExposureWithTheMapsKept) {
   EXPECT_EQ(readReport(out)["stages"]["match_response"]["skip_reasons"]["off"], 4);
 }
 
+// camera_match.bloom: a white glossy sphere whose highlight and clipped
+// soft boxes take it above white gets the lens's glare around it: the
+// composite only brightens, and only near the object; an object that
+// cannot exceed white skips, and says so.
+TEST_F(EndToEnd, BloomBrightensAroundTheObjectOnlyAndSkipsWhenNothingIsAboveWhite) {
+  const int frames = 12;
+  const std::string object = "lights:\n  shadows: false\nobject:\n  albedo: [1.0, 1.0, 1.0]\n  k_specular: 1.0\n"
+                             "  shininess: 16\n";
+  const fs::path plain_config = dir_ / "plain.yaml", bloom_config = dir_ / "bloom.yaml";
+  std::ofstream(plain_config) << object;
+  std::ofstream(bloom_config) << object << "camera_match:\n  bloom: true\n";
+  const fs::path plain_out = dir_ / "plain", bloom_out = dir_ / "bloom";
+  for (const auto& [yaml, dir] : {std::pair{plain_config, plain_out}, std::pair{bloom_config, bloom_out}}) {
+    const CommandResult result = run("run --source sim --display headless --frames " + std::to_string(frames) +
+                                     " --config " + yaml.string() + " --out " + dir.string());
+    ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  }
+  const nlohmann::json report = readReport(bloom_out);
+  const nlohmann::json& stage = report["stages"]["bloom"];
+  EXPECT_EQ(stage["runs"].get<int>() + stage["skipped"].get<int>(), frames);
+  EXPECT_GE(stage["runs"].get<int>(), 1);
+  // The default matte sphere, before the lights are fitted, is under white
+  // by the bound (the maps at most the clip, albedo 0.8): skipped.
+  const fs::path matte_config = dir_ / "matte.yaml", matte_out = dir_ / "matte";
+  std::ofstream(matte_config) << "lights:\n  shadows: false\ncamera_match:\n  bloom: true\n";
+  const CommandResult matte = run("run --source sim --display headless --frames 4 --config " +
+                                  matte_config.string() + " --out " + matte_out.string());
+  ASSERT_EQ(matte.exit_status, 0) << matte.stderr_text;
+  EXPECT_EQ(readReport(matte_out)["stages"]["bloom"]["skip_reasons"].value("nothing_above_white", 0), 4);
+  EXPECT_EQ(readReport(plain_out)["stages"]["bloom"]["skip_reasons"]["off"].get<int>() +
+                readReport(plain_out)["stages"]["bloom"]["skip_reasons"].value("kept_frame_unchanged", 0),
+            frames);
+
+  char png[32];
+  std::snprintf(png, sizeof png, "frame_%06d.png", frames - 1);
+  const cv::Mat plain = cv::imread((plain_out / png).string()), bloomed = cv::imread((bloom_out / png).string());
+  ASSERT_FALSE(plain.empty() || bloomed.empty());
+  // Where the object is: as the first test finds it, against the camera frame.
+  sim::SceneConfig scene = sim::defaultScene();
+  scene.environment = "studio";
+  const sim::World world(scene);
+  ImageRGB8 camera_frame;
+  FrameTruth truth;
+  world.render(static_cast<std::uint64_t>(frames - 1), camera_frame, truth);
+  const sim::ProbeOutline sphere = sim::probeOutline(scene.camera, truth.pose, glm::dvec3(0.0, 0.0, 0.035), 0.035);
+  ASSERT_TRUE(sphere.valid);
+  // The glare's reach: 3 sigma of 0.5 degrees, and its layer's texel.
+  const double reach_px = 3.0 * scene.camera.fx_px * std::tan(0.5 * M_PI / 180.0) + 4.0;
+  int brighter = 0, darker = 0, beyond_reach = 0;
+  for (int y = 0; y < plain.rows; ++y)
+    for (int x = 0; x < plain.cols; ++x) {
+      const cv::Vec3b a = plain.at<cv::Vec3b>(y, x), b = bloomed.at<cv::Vec3b>(y, x);
+      if (a == b) continue;
+      bool up = true;
+      for (int c = 0; c < 3; ++c) up = up && b[c] >= a[c];
+      (up ? brighter : darker) += 1;
+      if (glm::length(glm::dvec2(x, y) - sphere.center_px) > sphere.radius_px + reach_px) ++beyond_reach;
+    }
+  EXPECT_GT(brighter, 100);
+  EXPECT_EQ(darker, 0);
+  EXPECT_EQ(beyond_reach, 0);
+}
+
 }  // namespace
 }  // namespace probelight
