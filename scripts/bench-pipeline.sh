@@ -4,8 +4,9 @@
 #   1. defaults on a still camera;
 #   2. the reflection and diffuse maps remade every frame;
 #   3. maps and shadow maps remade every frame;
-#   and 1. with the camera match (camera_match.noise and .blur: the
-#   frame's noise and blur measured and given to the object, issue 19),
+#   and 1. with the camera match (camera_match.noise, .blur and .bloom:
+#   the frame's noise and blur measured and given to the object, and the
+#   lens's glare round its light above white, issue 19),
 #   and without the object following the camera's exposure and white
 #   balance (camera_match.response, on by default);
 # each on 640x480 frames the simulator rendered once and that are replayed
@@ -41,7 +42,7 @@ scripts/replay-frames.sh "$probelight" "$work" "$frames"
 
 printf '%%YAML:1.0\n---\nmap_updates:\n  max_age_frames: 1\n' >"$work/maps.yaml"
 printf '%%YAML:1.0\n---\nmap_updates:\n  max_age_frames: 1\nlights:\n  shadow_updates: every_frame\n' >"$work/maps_shadows.yaml"
-printf '%%YAML:1.0\n---\ncamera_match:\n  noise: true\n  blur: true\n' >"$work/camera_match.yaml"
+printf '%%YAML:1.0\n---\ncamera_match:\n  noise: true\n  blur: true\n  bloom: true\n' >"$work/camera_match.yaml"
 printf '%%YAML:1.0\n---\ncamera_match:\n  response: false\n' >"$work/no_response.yaml"
 
 configs=(defaults camera_match no_response maps maps_shadows demo)
@@ -63,11 +64,11 @@ python3 - "$work" "$rounds" "$csv" "${configs[@]}" <<'EOF'
 import json, statistics, sys
 work, rounds, csv_path, configs = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4:]
 labels = {"defaults": "defaults, still camera (replayed)", "maps": "maps every frame (replayed)",
-          "camera_match": "defaults + camera_match noise and blur (replayed)",
+          "camera_match": "defaults + camera_match noise, blur and bloom (replayed)",
           "no_response": "defaults without camera_match.response (replayed)",
           "maps_shadows": "maps and shadows every frame (replayed)", "demo": "demo: simulator + a PNG per frame"}
 stages = ["upload", "detect_pose", "probe_to_cube", "diffuse_blur", "clipped_rescale", "shadows", "match_response",
-          "match_noise", "match_blur", "render", "present"]
+          "match_noise", "match_blur", "bloom", "render", "present"]
 rows = []
 print("| run | fps (median of %d rounds; all) | " % rounds + " | ".join(stages) + " |")
 print("|---|---|" + "---|" * len(stages))
