@@ -372,6 +372,7 @@ void LightsStage::saveLighting(const ibl::LightingFit& fit, MapsStage& maps) {
 Status LightsStage::followClippedLights(std::uint64_t frame_number, const MapsStage& maps) {
   if (clipped_.empty()) return Status::ok();
   std::vector<double> shares;
+  const glm::dvec3 fit_to_maps = responseRatio(fit_response_, maps.mapsResponse());
   {
     StageTimer timer(report_, kRescaleStageName);
     std::string error;
@@ -380,7 +381,7 @@ Status LightsStage::followClippedLights(std::uint64_t frame_number, const MapsSt
     // Compared with the clip in the fit frame's units: the probe's map is
     // clipped there (MapsStage::setLightsFittedAt), and a light still as
     // bright as the clip was then still clips, whatever auto exposure did.
-    const glm::vec3 to_fit(1.0 / responseRatio(fit_response_, maps.mapsResponse()));
+    const glm::vec3 to_fit(1.0 / fit_to_maps);
     for (auto& face : live->faces)
       for (glm::vec3& texel : face) texel *= to_fit;
     // With the probe over views, the texels a sharper view showed the fit's
@@ -395,15 +396,13 @@ Status LightsStage::followClippedLights(std::uint64_t frame_number, const MapsSt
   ibl::setClippedLights(lighting_, clipped_.lights(), shares);
   report_.count("clipped_rescales");
   std::vector<double> scale = shares;
-  const double exposure_to_maps = responseRatio(fit_response_, maps.mapsResponse()).g;
-  for (double& s : scale) s *= exposure_to_maps;
+  for (double& s : scale) s *= fit_to_maps.g;
   clipped_now_report_ = {{"frame", frame_number}, {"scale", scale}, {"still_clipping_share", shares}};
   return Status::ok();
 }
 
 void LightsStage::showInMapsUnits(const MapsStage& maps) {
-  lights_to_maps_ = responseRatio(fit_response_, maps.mapsResponse());
-  const glm::vec3 factor(lights_to_maps_);
+  const glm::vec3 factor(responseRatio(fit_response_, maps.mapsResponse()));
   shown_lighting_ = lighting_;
   shown_lighting_.ambient_rgb *= factor;
   shown_lighting_.highlight_rgb *= factor;

@@ -93,9 +93,6 @@ class LightsStage {
   // frame's exposure and white balance brought to the maps' frame's), and
   // the factor that brings the dome's irradiances there too.
   const ibl::SceneLighting& sceneLighting() const { return shown_lighting_; }
-  // The fitted lights' per-channel factor into the maps' units (1 before
-  // a fit or the first maps, or when the camera cannot say).
-  glm::dvec3 lightsToMaps() const { return lights_to_maps_; }
   // The response of the frame the lights in use were fitted in, for the
   // maps' clip level (MapsStage::setLightsFittedAt); none before any
   // lights and while recalibrating (the fit reads the 8-bit maps as shown).
@@ -169,7 +166,6 @@ class LightsStage {
   ibl::SceneLighting lighting_;  // no highlight until the first calibration; in the fit frame's units
   ibl::SceneLighting shown_lighting_;  // lighting_ in the maps' units
   FrameResponse fit_response_;  // the camera's response in the fit frame (0s: unknown)
-  glm::dvec3 lights_to_maps_{1.0};
   // The maps' response when lights_fitted_e_up_ was read from them.
   FrameResponse e_up_response_;
   std::optional<StoredLighting> stored_lighting_;
