@@ -794,6 +794,7 @@ struct RenderRig {
   // with camera_match.blur), the noise then at its composite.
   passes::ObjectBlurLayer* blur = nullptr;
   double blur_sigma_px = 0.0;
+  glm::dvec2 blur_smear_px{0.0};  // the camera's motion over the exposure (camera_match.motion_blur)
   const passes::SensorNoiseMatch* blur_noise = nullptr;
   const passes::SensorNoiseTexture* blur_noise_texture = nullptr;
   // With `bloom`, the sphere's light beyond white spread around it (the
@@ -814,7 +815,7 @@ struct RenderRig {
     if (blur)
       blur->beginObject(passes::projectedBounds(s.scene.camera, s.frames[0].truth.pose, centre - glm::dvec3(0.035),
                                                 centre + glm::dvec3(0.035), 0.01, 2),
-                        blur_sigma_px);
+                        blur_sigma_px, blur_smear_px);
     if (!compositor.drawSphereObject(s.scene.camera, s.frames[0].truth.pose, centre, 0.035, material, lighting, maps,
                                      error))
       return false;
@@ -860,8 +861,12 @@ void renderFrameWithBloom(benchmark::State& state) {
 // With `match_noise`, the frame's noise added to the sphere (the compose
 // stage with camera_match.noise); with `match_blur` too, the sphere through
 // the blur layer by 1.04 px (a 1 px lens with the pixel's area) and the
-// noise at its composite: their cost is the difference.
-void renderFrame(benchmark::State& state, bool match_noise, bool match_blur = false) {
+// noise at its composite: their cost is the difference. With a smear
+// (and no lens blur or noise), the sphere through the blur layer's box
+// along it: the compose stage with camera_match.motion_blur, its
+// Gaussian pass then one tap.
+void renderFrame(benchmark::State& state, bool match_noise, bool match_blur = false,
+                 const glm::dvec2& smear_px = glm::dvec2(0.0)) {
   if (!requireGl(state)) return;
   RenderRig rig;
   std::string error;
@@ -885,6 +890,13 @@ void renderFrame(benchmark::State& state, bool match_noise, bool match_blur = fa
     rig.blur_sigma_px = 1.04;
     rig.blur_noise = &match;
     rig.blur_noise_texture = &noise_texture;
+  } else if (smear_px != glm::dvec2(0.0)) {
+    if (!blur.init(setup().scene.camera.width_px, setup().scene.camera.height_px, ibl::CameraTransfer{}, error)) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+    rig.blur = &blur;
+    rig.blur_smear_px = smear_px;
   } else if (match_noise) {
     rig.compositor.setSensorNoise(&match);
   }
@@ -1503,6 +1515,12 @@ void registerAll() {
       ->UseRealTime()
       ->MinTime(kMinTime);
   benchmark::RegisterBenchmark("render/640x480/match_noise", [](benchmark::State& state) { renderFrame(state, true); })
+      ->Unit(kMillisecond)
+      ->UseRealTime()
+      ->MinTime(kMinTime);
+  // The pan path's fastest smear over 10 ms (sim camera_path pan): 7 px.
+  benchmark::RegisterBenchmark("render/640x480/motion_blur",
+                               [](benchmark::State& state) { renderFrame(state, false, false, glm::dvec2(7.0, 0.0)); })
       ->Unit(kMillisecond)
       ->UseRealTime()
       ->MinTime(kMinTime);

@@ -222,6 +222,7 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.camera_match.bloom = camera_match.readBool("bloom", settings.camera_match.bloom);
   settings.camera_match.bloom_sigma_deg =
       camera_match.readDouble("bloom_sigma_deg", settings.camera_match.bloom_sigma_deg, Range::openClosed(0.0, 10.0));
+  settings.camera_match.motion_blur = camera_match.readBool("motion_blur", settings.camera_match.motion_blur);
   camera_match.rejectUnknownFields();
 
   ConfigReader sim = file.section("sim");
@@ -265,6 +266,7 @@ AppSettings loadAppSettings(const std::string& path) {
       sim.readDouble("white_balance_shift_red", settings.sim.white_balance_shift_red, Range::closed(0.125, 8.0));
   settings.sim.white_balance_shift_blue =
       sim.readDouble("white_balance_shift_blue", settings.sim.white_balance_shift_blue, Range::closed(0.125, 8.0));
+  settings.sim.motion_blur = sim.readBool("motion_blur", settings.sim.motion_blur);
   settings.sim.camera_buffers = sim.readInt("camera_buffers", settings.sim.camera_buffers, Range::closed(2, 16));
   sim.rejectUnknownFields();
 

@@ -65,6 +65,9 @@ struct SimConfig {
   double exposure_shift_stops = 0.0;
   double white_balance_shift_red = 1.0;
   double white_balance_shift_blue = 1.0;
+  // The simulated shutter stays open for each frame's exposure time while
+  // the camera moves: motion blur (SimCameraOptions::motion_blur).
+  bool motion_blur = false;
   // Buffers in the simulated camera's pool: an exposure change reaches the
   // frames from this many after the newest one handed out (its latency, as
   // a real pipeline's queued requests give one).

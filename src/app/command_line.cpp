@@ -308,7 +308,7 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
         into(options.capture_dir)},
        {"--env", "NAME|FILE", "sim: studio, sun_sky, sunrise, night_street, overcast, coloured_wall, uniform, or an .exr/.hdr file",
         into(options.sim_env)},
-       {"--path", "NAME", "sim: camera path: static, orbit, slow_wobble, random, hand_held_sweep", into(options.sim_path)},
+       {"--path", "NAME", "sim: camera path: static, orbit, slow_wobble, random, hand_held_sweep, pan", into(options.sim_path)},
        {"--model", "FILE", "a glTF 2.0 model (.gltf, .glb) to show instead of the sphere (overrides object.model)",
         into(options.model_path)}},
       {{"-q,--quiet", "no per-frame status lines", [&] { options.quiet = true; }}});

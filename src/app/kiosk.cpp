@@ -35,6 +35,7 @@
 #include "sim/world.hpp"
 #include "stages/compose_stage.hpp"
 #include "stages/blur_match_stage.hpp"
+#include "stages/motion_match_stage.hpp"
 #include "stages/noise_match_stage.hpp"
 #include "stages/response_match_stage.hpp"
 #include "stages/frame_context.hpp"
@@ -164,6 +165,7 @@ class Kiosk {
     response_->run(ctx.frame, *maps_, ctx.number);
     noise_->run(ctx.track, ctx.frame, ctx.number);
     blur_->run(ctx.track, ctx.frame);
+    motion_->run(ctx.track, ctx.frame.metadata, ctx.time_s);
     PROBELIGHT_TRY(show(ctx.track, ctx.status, ctx.number));
     last_track_ = ctx.track;
     last_frame_number_ = ctx.number;
@@ -192,6 +194,7 @@ class Kiosk {
     compose_->setResponseGain(response_->gain());
     compose_->setSensorNoise(noise_->match());
     compose_->setBlur(blur_->edgeSigmaPx());
+    compose_->setMotionSmear(motion_->smearPx());
     PROBELIGHT_TRY(compose_->draw(track, status, upload_->texture(), *maps_, *shadows_, lights_->sceneLighting()));
     return present(status, frame_number, log_status_change);
   }
@@ -207,6 +210,7 @@ class Kiosk {
     response_->skip(kReason);
     noise_->skip(kReason);
     blur_->skip(kReason);
+    motion_->skip(kReason);
     // The display's frame already holds the kept frame with this status
     // (nothing was drawn since): it is shown again, not drawn again.
     if (kept_frame_status_ == status) {
@@ -426,6 +430,7 @@ class Kiosk {
     camera_options.exposure_shift_stops = settings.sim.exposure_shift_stops;
     camera_options.white_balance_shift_red = settings.sim.white_balance_shift_red;
     camera_options.white_balance_shift_blue = settings.sim.white_balance_shift_blue;
+    camera_options.motion_blur = settings.sim.motion_blur;
     source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), settings.sim.camera_buffers, camera_options);
     return Status::ok();
   }
@@ -454,6 +459,8 @@ class Kiosk {
     noise_ = std::make_unique<NoiseMatchStage>(settings.camera_match, inputs_.camera, inputs_.rig, report_);
     blur_ = std::make_unique<BlurMatchStage>(settings.camera_match, inputs_.camera, inputs_.rig,
                                              settings.maps.stages.camera_transfer, report_);
+    motion_ = std::make_unique<MotionMatchStage>(settings.camera_match, inputs_.camera,
+                                                 object.shape.boundingCentre(), report_);
     if (world_) truth_ = std::make_unique<TruthMonitor>(world_, report_);
     PROBELIGHT_TRY(upload_->init(capabilities_));
     PROBELIGHT_TRY(maps_->init(capabilities_));
@@ -621,6 +628,7 @@ class Kiosk {
   std::unique_ptr<ResponseMatchStage> response_;
   std::unique_ptr<NoiseMatchStage> noise_;
   std::unique_ptr<BlurMatchStage> blur_;
+  std::unique_ptr<MotionMatchStage> motion_;
   std::unique_ptr<ComposeStage> compose_;
   std::unique_ptr<TruthMonitor> truth_;
 

@@ -134,13 +134,15 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
   }
   exposure.exposure_us = std::max(exposure.exposure_us, options_.min_exposure_us);
   const double exposure_ev = std::log2(exposure.exposure_us * exposure.analogue_gain / kSimExposureUs);
+  constexpr double kFrameIntervalUs = 1e6 / 30.0;
+  const double shutter_frames = options_.motion_blur ? exposure.exposure_us / kFrameIntervalUs : 0.0;
   try {
     FrameTruth truth;
     if (options_.layout != PixelLayout::kRgb8) {
-      world_->render(index, rendered_, truth, exposure_ev, white_balance);
+      world_->render(index, rendered_, truth, exposure_ev, white_balance, shutter_frames);
       encodeSimFrame(rendered_, options_.layout, buffer);
     } else {
-      world_->render(index, buffer.rgb, truth, exposure_ev, white_balance);
+      world_->render(index, buffer.rgb, truth, exposure_ev, white_balance, shutter_frames);
       buffer.finishRgb();
     }
     buffer.metadata = FrameMetadata{};

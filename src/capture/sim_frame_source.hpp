@@ -55,6 +55,12 @@ struct SimCameraOptions {
   double exposure_shift_stops = 0.0;
   double white_balance_shift_red = 1.0;
   double white_balance_shift_blue = 1.0;
+  // The shutter stays open for the frame's exposure time (its metadata's
+  // exposure_us, a third of the 30 fps frame interval at the sensor's own
+  // 10 ms) while the camera moves along its path: motion blur, centred on
+  // the frame's time (sim::World::render's shutter_frames). false: each
+  // frame is an instant.
+  bool motion_blur = false;
 };
 
 class SimFrameSource : public ThreadedFrameSource {

@@ -50,6 +50,15 @@ std::vector<float> objectBlurWeights(double sigma_px) {
   return std::vector<float>(weights.begin(), weights.end());
 }
 
+MotionSmearTaps motionSmearTaps(const glm::dvec2& smear_px) {
+  const double length_px = glm::length(smear_px);
+  if (!(length_px > 0.0) || !std::isfinite(length_px)) return {};
+  MotionSmearTaps result;
+  result.taps = std::clamp(static_cast<int>(std::ceil(0.5 * length_px)), 1, kMaxMotionSmearTaps);
+  result.step_px = smear_px / static_cast<double>(2 * result.taps + 1);
+  return result;
+}
+
 bool ObjectBlurLayer::init(int width_px, int height_px, const ibl::CameraTransfer& camera_transfer,
                            std::string& error) {
   width_px_ = width_px;
@@ -79,19 +88,35 @@ const gles::Program* ObjectBlurLayer::program(Pass pass, int taps, bool noise, s
   return &programs_.emplace(key, std::move(*made)).first->second;
 }
 
-void ObjectBlurLayer::scissorToRegion(int viewport_x, int viewport_y) const {
-  // GL's window rows count from the bottom; the region's from the top.
-  glScissor(viewport_x + region_.x, viewport_y + (height_px_ - region_.y - region_.height), region_.width,
-            region_.height);
+void ObjectBlurLayer::scissorTo(const PixelRect& rect, int viewport_x, int viewport_y) const {
+  // GL's window rows count from the bottom; the rectangle's from the top.
+  glScissor(viewport_x + rect.x, viewport_y + (height_px_ - rect.y - rect.height), rect.width, rect.height);
 }
 
-void ObjectBlurLayer::beginObject(const PixelRect& region, double sigma_px) {
+void ObjectBlurLayer::beginObject(const PixelRect& region, double sigma_px, const glm::dvec2& smear_px) {
   weights_ = objectBlurWeights(sigma_px);
+  smear_ = motionSmearTaps(smear_px);
+  // The Gaussian's taps, and the box's (its last tap, and the bilinear
+  // texel past it).
   const int reach = static_cast<int>(weights_.size()) - 1;
-  const int left = std::max(0, region.x - reach), top = std::max(0, region.y - reach);
-  const int right = std::min(width_px_, region.x + region.width + reach);
-  const int bottom = std::min(height_px_, region.y + region.height + reach);
-  region_ = PixelRect{left, top, std::max(0, right - left), std::max(0, bottom - top)};
+  const int reach_x = reach + static_cast<int>(std::ceil(smear_.taps * std::abs(smear_.step_px.x))) + 1;
+  const int reach_y = reach + static_cast<int>(std::ceil(smear_.taps * std::abs(smear_.step_px.y))) + 1;
+  auto grown = [&](int times) {
+    const int left = std::max(0, region.x - times * reach_x), top = std::max(0, region.y - times * reach_y);
+    const int right = std::min(width_px_, region.x + region.width + times * reach_x);
+    const int bottom = std::min(height_px_, region.y + region.height + times * reach_y);
+    return PixelRect{left, top, std::max(0, right - left), std::max(0, bottom - top)};
+  };
+  // The layers keep earlier frames' objects outside what this frame
+  // writes, and each pass reads up to the reach past what it writes: the
+  // composite writes the region grown by the reach and reads the last
+  // layer there grown by another; the layer passes (at most two) write
+  // the region grown by three reaches, from the layer cleared over four.
+  // So nothing an earlier frame left is read (a moving object's old
+  // place would otherwise bleed into the new one's edge).
+  region_ = grown(1);
+  passes_region_ = grown(3);
+  cleared_region_ = grown(4);
   saved_.capture();
   // The frame under the region, as the base (texture rows from the
   // bottom, as the window's).
@@ -105,10 +130,8 @@ void ObjectBlurLayer::beginObject(const PixelRect& region, double sigma_px) {
   }
   glBindFramebuffer(GL_FRAMEBUFFER, layer_framebuffer_.id());
   glViewport(0, 0, width_px_, height_px_);
-  // The passes read `reach` texels past the object: the region is grown by
-  // it and cleared whole (transparent), so only the region is drawn and read.
   glEnable(GL_SCISSOR_TEST);
-  scissorToRegion(0, 0);
+  scissorTo(cleared_region_, 0, 0);
   glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
   glDepthMask(GL_TRUE);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -127,8 +150,7 @@ bool ObjectBlurLayer::composite(const SensorNoiseMatch* noise, const SensorNoise
   std::vector<float> weights = weights_;
   weights.resize(static_cast<size_t>(taps + 1), 0.0f);
   const bool add_noise = noise != nullptr && noise_texture != nullptr && noise_texture->valid();
-  const gles::Program* horizontal = program(Pass::kHorizontal, taps, false, error);
-  const gles::Program* composite = horizontal ? program(Pass::kComposite, taps, add_noise, error) : nullptr;
+  const gles::Program* composite = program(Pass::kComposite, taps, add_noise, error);
   if (composite == nullptr) {
     restore();
     return false;
@@ -136,27 +158,30 @@ bool ObjectBlurLayer::composite(const SensorNoiseMatch* noise, const SensorNoise
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
   glDisable(GL_BLEND);
-  glActiveTexture(GL_TEXTURE0);
-  // Along rows, layer -> horizontal, over the region.
-  glBindFramebuffer(GL_FRAMEBUFFER, horizontal_framebuffer_.id());
-  glViewport(0, 0, width_px_, height_px_);
-  glEnable(GL_SCISSOR_TEST);
-  scissorToRegion(0, 0);
-  horizontal->use();
-  glBindTexture(GL_TEXTURE_2D, layer_.id());
-  glUniform1i(horizontal->uniform("u_layer"), 0);
-  glUniform2f(horizontal->uniform("u_step"), 1.0f / static_cast<float>(width_px_), 0.0f);
-  glUniform1fv(horizontal->uniform("u_weight"), static_cast<GLsizei>(weights.size()), weights.data());
-  if (camera_transfer_.curve == ibl::CameraTransfer::Curve::kGamma)
-    glUniform1f(horizontal->uniform("u_camera_gamma"), static_cast<float>(camera_transfer_.gamma));
-  quad_.draw(horizontal->attribute("a_position"));
+  // With a smear: its box, layer -> horizontal; the Gaussian along rows,
+  // horizontal -> layer; the composite reads the layer. Without: the
+  // Gaussian along rows, layer -> horizontal; the composite reads that.
+  const gles::Texture* last = &horizontal_;
+  if (smear_.taps > 0) {
+    const std::vector<float> box(static_cast<size_t>(smear_.taps + 1), 1.0f / static_cast<float>(2 * smear_.taps + 1));
+    if (!passIntoLayer(layer_, horizontal_framebuffer_, smear_.step_px, box, error) ||
+        !passIntoLayer(horizontal_, layer_framebuffer_, glm::dvec2(1.0, 0.0), weights, error)) {
+      restore();
+      return false;
+    }
+    last = &layer_;
+  } else if (!passIntoLayer(layer_, horizontal_framebuffer_, glm::dvec2(1.0, 0.0), weights, error)) {
+    restore();
+    return false;
+  }
   // The caller's framebuffer: over the region, the blurred object mixed
   // into the base.
   restore();
   glEnable(GL_SCISSOR_TEST);
-  scissorToRegion(saved_.viewport[0], saved_.viewport[1]);
+  scissorTo(region_, saved_.viewport[0], saved_.viewport[1]);
   composite->use();
-  glBindTexture(GL_TEXTURE_2D, horizontal_.id());
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, last->id());
   glUniform1i(composite->uniform("u_layer"), 0);
   glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_2D, base_.id());
@@ -174,6 +199,34 @@ bool ObjectBlurLayer::composite(const SensorNoiseMatch* noise, const SensorNoise
   }
   saved_.restoreScissor();
   return gles::checkGl("ObjectBlurLayer::composite", error);
+}
+
+}  // namespace probelight::passes
+
+namespace probelight::passes {
+
+bool ObjectBlurLayer::passIntoLayer(const gles::Texture& from, const gles::Framebuffer& to, const glm::dvec2& step_px,
+                                    const std::vector<float>& weights, std::string& error) {
+  const int taps = static_cast<int>(weights.size()) - 1;
+  const gles::Program* pass = program(Pass::kHorizontal, taps, false, error);
+  if (pass == nullptr) return false;
+  glBindFramebuffer(GL_FRAMEBUFFER, to.id());
+  glViewport(0, 0, width_px_, height_px_);
+  glEnable(GL_SCISSOR_TEST);
+  scissorTo(passes_region_, 0, 0);
+  pass->use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, from.id());
+  glUniform1i(pass->uniform("u_layer"), 0);
+  // In texture coordinates; the layer's rows count from the bottom, as
+  // the frame's NDC it was drawn with, so a step down the image is -v.
+  glUniform2f(pass->uniform("u_step"), static_cast<float>(step_px.x / width_px_),
+              static_cast<float>(-step_px.y / height_px_));
+  glUniform1fv(pass->uniform("u_weight"), static_cast<GLsizei>(weights.size()), weights.data());
+  if (camera_transfer_.curve == ibl::CameraTransfer::Curve::kGamma)
+    glUniform1f(pass->uniform("u_camera_gamma"), static_cast<float>(camera_transfer_.gamma));
+  quad_.draw(pass->attribute("a_position"));
+  return gles::checkGl("ObjectBlurLayer::passIntoLayer", error);
 }
 
 }  // namespace probelight::passes

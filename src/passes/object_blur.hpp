@@ -25,6 +25,8 @@
 #include <utility>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include "gles/gl_objects.hpp"
 #include "passes/framebuffer_state_guard.hpp"
 #include "ibl/color_transfer.hpp"
@@ -35,6 +37,21 @@ namespace probelight::passes {
 
 // Taps either side the shaders are built for, at most: 3 sigma of a 4 px blur.
 constexpr int kMaxObjectBlurTaps = 12;
+// Taps either side of a motion smear's box, at most: 2 x 16 + 1 samples
+// keep their spacing under a pixel up to a 33 px smear.
+constexpr int kMaxMotionSmearTaps = 16;
+
+// Pure: the box of a motion smear `smear_px` long (its whole length,
+// centred) as 2 taps + 1 equal samples `step_px` apart, at the middles of
+// as many equal parts of it (the midpoint rule). taps = ceil(length / 2)
+// within 1..kMaxMotionSmearTaps, so the spacing is under a pixel up to
+// that length: with the layer's bilinear taps, the sum is then the box's
+// integral up to the interpolation between neighbouring texels.
+struct MotionSmearTaps {
+  int taps = 0;          // either side of the centre
+  glm::dvec2 step_px{0.0};
+};
+MotionSmearTaps motionSmearTaps(const glm::dvec2& smear_px);
 
 // Pure: sigma_px^2 = frame_edge_sigma_px^2 - object_edge_variance_px2, 0 when
 // the object's edges are already as soft.
@@ -58,7 +75,11 @@ class ObjectBlurLayer {
   // reach, as the base; then binds the layer for the object's draw,
   // cleared to transparent black there (the rest is not read). Saves the
   // caller's framebuffer, viewport, clear colour and scissor.
-  void beginObject(const PixelRect& region, double sigma_px);
+  // `smear_px`: the camera's motion over the exposure (zero: none), a box
+  // along it applied before the lens's Gaussian (motion blur; the lens
+  // spreads each instant's light, the sensor sums the instants: the two
+  // commute).
+  void beginObject(const PixelRect& region, double sigma_px, const glm::dvec2& smear_px = glm::dvec2(0.0));
   // Over the region of the caller's framebuffer, the blurred object mixed
   // into the base, with `noise` added after the blur when given. Restores
   // what beginObject() saved; blending and depth test left off.
@@ -67,9 +88,14 @@ class ObjectBlurLayer {
   void restore();
 
  private:
+  // kHorizontal: a pass into a layer (the smear's box, or the Gaussian
+  // along rows); kComposite: the last, into the caller's framebuffer.
   enum class Pass { kHorizontal, kComposite };
+  // One pass into a layer: `from` read along `step_px` with `weights`.
+  bool passIntoLayer(const gles::Texture& from, const gles::Framebuffer& to, const glm::dvec2& step_px,
+                     const std::vector<float>& weights, std::string& error);
   const gles::Program* program(Pass pass, int taps, bool noise, std::string& error);
-  void scissorToRegion(int viewport_x, int viewport_y) const;
+  void scissorTo(const PixelRect& rect, int viewport_x, int viewport_y) const;
 
   int width_px_ = 0, height_px_ = 0;
   ibl::CameraTransfer camera_transfer_;
@@ -78,8 +104,12 @@ class ObjectBlurLayer {
   gles::Framebuffer layer_framebuffer_, horizontal_framebuffer_;
   gles::FullScreenQuad quad_;
   std::map<std::tuple<Pass, int, bool>, gles::Program> programs_;
-  PixelRect region_;  // grown by the reach, within the frame
+  // The object's region grown by the reach (the composite's and the
+  // base's), by three reaches (the layer passes') and by four (the
+  // layer's clear); each within the frame.
+  PixelRect region_, passes_region_, cleared_region_;
   std::vector<float> weights_;
+  MotionSmearTaps smear_;
   DrawTargetState saved_;  // the caller's, while the layer is bound
 };
 

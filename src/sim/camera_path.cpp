@@ -22,7 +22,7 @@ std::uint64_t mixSeed(std::uint64_t seed, std::uint64_t index) {
 class StaticPath : public CameraPath {
  public:
   explicit StaticPath(PoseCamFromWorld pose) : pose_(pose) {}
-  PoseCamFromWorld pose(std::uint64_t) const override { return pose_; }
+  PoseCamFromWorld poseAt(double) const override { return pose_; }
 
  private:
   PoseCamFromWorld pose_;
@@ -31,8 +31,8 @@ class StaticPath : public CameraPath {
 class OrbitPath : public CameraPath {
  public:
   OrbitPath(glm::dvec3 target, const CameraPathConfig& config) : target_(target), config_(config) {}
-  PoseCamFromWorld pose(std::uint64_t frame) const override {
-    double azimuth = config_.azimuth_start_deg + config_.azimuth_rate_deg_per_frame * static_cast<double>(frame);
+  PoseCamFromWorld poseAt(double frame) const override {
+    double azimuth = config_.azimuth_start_deg + config_.azimuth_rate_deg_per_frame * frame;
     return lookAtPose(orbitEye(target_, config_.distance_m, config_.elevation_deg, azimuth), target_);
   }
 
@@ -46,8 +46,8 @@ class OrbitPath : public CameraPath {
 class SlowWobblePath : public CameraPath {
  public:
   SlowWobblePath(glm::dvec3 target, const CameraPathConfig& config) : target_(target), config_(config) {}
-  PoseCamFromWorld pose(std::uint64_t frame) const override {
-    const double t = static_cast<double>(frame) / 30.0;
+  PoseCamFromWorld poseAt(double frame) const override {
+    const double t = frame / 30.0;
     auto wobble = [t](double f1, double f2, double phase) {
       return 0.6 * std::sin(2 * kPi * f1 * t + phase) + 0.4 * std::sin(2 * kPi * f2 * t + 2.1 * phase);
     };
@@ -72,15 +72,15 @@ class SlowWobblePath : public CameraPath {
 class HandHeldSweepPath : public CameraPath {
  public:
   HandHeldSweepPath(glm::dvec3 target, const CameraPathConfig& config) : target_(target), config_(config), wobble_(target, config) {}
-  PoseCamFromWorld pose(std::uint64_t frame) const override {
+  PoseCamFromWorld poseAt(double frame) const override {
     const double one_way_frames = std::max(1.0, 30.0 * config_.sweep_seconds);
     // 0 -> 1 -> 0 over two sweeps, with the arm's ease (a cosine) at each end.
-    const double phase = std::fmod(static_cast<double>(frame) / one_way_frames, 2.0);
+    const double phase = std::fmod(std::max(frame, 0.0) / one_way_frames, 2.0);
     const double along = 0.5 - 0.5 * std::cos(kPi * phase);
     const double azimuth = config_.azimuth_start_deg + config_.sweep_azimuth_deg * (2.0 * along - 1.0);
     const double elevation = config_.elevation_deg + config_.sweep_elevation_deg * std::sin(kPi * along);
     // The hand's drift: the wobble path's offsets from its own start.
-    const PoseCamFromWorld drift = wobble_.pose(frame);
+    const PoseCamFromWorld drift = wobble_.poseAt(frame);
     const glm::dvec3 drift_eye = drift.cameraCenterWorld() -
                                  orbitEye(target_, config_.distance_m, config_.elevation_deg, config_.azimuth_start_deg);
     return lookAtPose(orbitEye(target_, config_.distance_m, elevation, azimuth) + drift_eye, target_);
@@ -92,13 +92,41 @@ class HandHeldSweepPath : public CameraPath {
   SlowWobblePath wobble_;
 };
 
+// A pan: the static pose turned about the camera's own vertical (its y
+// axis, the image's columns) through its centre by amplitude
+// sin(2 pi t / period): the image sweeps along its rows.
+class PanPath : public CameraPath {
+ public:
+  PanPath(glm::dvec3 target, const CameraPathConfig& config)
+      : config_(config),
+        still_(lookAtPose(orbitEye(target, config.distance_m, config.elevation_deg, config.azimuth_start_deg), target)) {}
+  PoseCamFromWorld poseAt(double frame) const override {
+    const double t = frame / 30.0;
+    const double yaw = degToRad(config_.pan_amplitude_deg) * std::sin(2 * kPi * t / config_.pan_period_s);
+    // x_cam = Ry(yaw) (x_still_cam): the camera turned by -yaw about its y axis.
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    const glm::dmat3 turn(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);  // Ry(yaw), columns
+    const glm::dvec3 eye = still_.cameraCenterWorld();
+    PoseCamFromWorld pose;
+    pose.R_cam_from_world = turn * still_.R_cam_from_world;
+    pose.t_cam_from_world = -(pose.R_cam_from_world * eye);
+    return pose;
+  }
+
+ private:
+  CameraPathConfig config_;
+  PoseCamFromWorld still_;
+};
+
 class RandomPath : public CameraPath {
  public:
   RandomPath(const SceneConfig& scene)
       : generator_(scene.camera, scene.rig, scene.post_radius_m, scene.camera_path.random_min_distance_m,
                    scene.camera_path.random_max_distance_m),
         seed_(scene.seed) {}
-  PoseCamFromWorld pose(std::uint64_t frame) const override { return generator_.pose(seed_, frame); }
+  PoseCamFromWorld poseAt(double frame) const override {
+    return generator_.pose(seed_, static_cast<std::uint64_t>(std::llround(std::max(frame, 0.0))));
+  }
 
  private:
   RandomPoseGenerator generator_;
@@ -173,6 +201,10 @@ std::unique_ptr<CameraPath> makeCameraPath(const SceneConfig& scene) {
   if (config.name == "slow_wobble") return std::make_unique<SlowWobblePath>(target, config);
   if (config.name == "hand_held_sweep") return std::make_unique<HandHeldSweepPath>(target, config);
   if (config.name == "random") return std::make_unique<RandomPath>(scene);
+  if (config.name == "pan") {
+    if (!(config.pan_period_s > 0.0)) throw SceneError("camera_path.pan_period_s must be positive");
+    return std::make_unique<PanPath>(target, config);
+  }
   std::string known;
   for (const std::string& name : cameraPathNames()) known += (known.empty() ? "" : ", ") + name;
   throw SceneError("camera_path.name '" + config.name + "' is unknown (choose " + known + ")");

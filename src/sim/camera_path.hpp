@@ -39,7 +39,12 @@ class RandomPoseGenerator {
 class CameraPath {
  public:
   virtual ~CameraPath() = default;
-  virtual PoseCamFromWorld pose(std::uint64_t frame_index) const = 0;
+  PoseCamFromWorld pose(std::uint64_t frame_index) const { return poseAt(static_cast<double>(frame_index)); }
+  // The pose at a time between frames (in frame intervals), for a shutter
+  // open across it (motion blur). The smooth paths move continuously; the
+  // random path's independent views hold for the half-frame either side
+  // of their own.
+  virtual PoseCamFromWorld poseAt(double frame_time) const = 0;
 };
 
 // Throws SceneError naming camera_path.name when unknown.

@@ -34,7 +34,7 @@ const std::vector<std::string>& environmentNames() {
 }
 
 const std::vector<std::string>& cameraPathNames() {
-  static const std::vector<std::string> names = {"static", "orbit", "slow_wobble", "random", "hand_held_sweep"};
+  static const std::vector<std::string> names = {"static", "orbit", "slow_wobble", "random", "hand_held_sweep", "pan"};
   return names;
 }
 

@@ -60,6 +60,14 @@ struct CameraPathConfig {
   double sweep_azimuth_deg = 35.0;    // either side of azimuth_start_deg
   double sweep_elevation_deg = 15.0;  // risen at the arc's middle
   double sweep_seconds = 3.0;         // one way
+  // pan: the camera turning to and fro about its own vertical axis (the
+  // image's columns) through its centre, as a hand pans a phone,
+  // pan_amplitude_deg either side of the
+  // static pose, a sine of period pan_period_s at 30 fps: the whole image
+  // sweeps sideways, fastest (2 pi amplitude / period, 63 deg/s by default:
+  // 7 px over a 10 ms exposure at f 600) through the middle.
+  double pan_amplitude_deg = 10.0;
+  double pan_period_s = 1.0;
   // random: one independent pose per frame, see RandomPoseRange.
   double random_min_distance_m = 0.45;
   double random_max_distance_m = 0.75;

@@ -748,15 +748,77 @@ struct World::Impl {
     return (1 - f) * fs.post_radiance[i0] + f * fs.post_radiance[(i0 + 1) % kPostAzimuthSteps];
   }
 
-  FrameState frameState(std::uint64_t frame) const {
-    FrameState fs;
-    fs.pose = path->pose(frame);
+  // The camera's part of a frame state: where it is and what its rays meet.
+  void placeCamera(FrameState& fs, const PoseCamFromWorld& pose) const {
+    fs.pose = pose;
     fs.world_from_cam = glm::transpose(fs.pose.R_cam_from_world);
     fs.eye = fs.pose.cameraCenterWorld();
     const RigGeometry& rig = scene.rig;
     fs.ball_from_eye = SphereFromOrigin(fs.eye, rig.probe_center_w, rig.probe_radius_m);
     fs.post_from_eye = PostFromOrigin(fs.eye, {rig.probe_center_w.x, rig.probe_center_w.y}, scene.post_radius_m,
                                       rig.probe_center_w.z - rig.probe_radius_m);
+  }
+
+  // The instants a shutter open for `shutter_frames` frame intervals,
+  // centred on frame `frame` (so the frame's pose, the truth's, is the
+  // middle of its exposure), is sampled at: n instants at the middles of n
+  // equal parts of the exposure, each a whole frame state of `fs` with the
+  // camera moved along the path. n is the most any of a few points moves
+  // on screen across the exposure, rounded up (one instant when the camera
+  // holds still): each instant is integrated over the pixel's area, and a
+  // one-pixel box repeated at one-pixel steps is the continuous box a
+  // steady motion draws, so the smear has no steps.
+  std::vector<FrameState> shutterInstants(const FrameState& fs, std::uint64_t frame, double shutter_frames) const {
+    if (!(shutter_frames > 0.0)) return {fs};
+    const double middle = static_cast<double>(frame);
+    const PoseCamFromWorld opens = path->poseAt(middle - 0.5 * shutter_frames);
+    const PoseCamFromWorld closes = path->poseAt(middle + 0.5 * shutter_frames);
+    const double most_moved_px = largestScreenMotionPx(fs, opens, closes);
+    const int instants = std::clamp(static_cast<int>(std::ceil(most_moved_px)), 1, kMostShutterInstants);
+    if (instants == 1) return {fs};
+    std::vector<FrameState> result(static_cast<size_t>(instants), fs);
+    for (int i = 0; i < instants; ++i)
+      placeCamera(result[static_cast<size_t>(i)],
+                  path->poseAt(middle + shutter_frames * ((i + 0.5) / instants - 0.5)));
+    return result;
+  }
+  // A smear longer than this many pixels is sampled more coarsely (its
+  // steps then show on sharp edges).
+  static constexpr int kMostShutterInstants = 64;
+
+  // The longest on-screen path (pinhole, px) from pose `a` to pose `b` of
+  // the tag's corners, the ball's centre, and what the frame's corners and
+  // centre see (the ground where their rays meet it, else far away).
+  double largestScreenMotionPx(const FrameState& fs, const PoseCamFromWorld& a, const PoseCamFromWorld& b) const {
+    std::vector<glm::dvec3> points_w;
+    for (const glm::dvec3& corner : tagCornersWorld(scene.rig.tag_size_m)) points_w.push_back(corner);
+    points_w.push_back(scene.rig.probe_center_w);
+    const CameraIntrinsics& camera = scene.camera;
+    const double xs[] = {0.0, camera.cx_px, camera.width_px - 1.0};
+    const double ys[] = {0.0, camera.cy_px, camera.height_px - 1.0};
+    for (double x : xs)
+      for (double y : ys) {
+        const glm::dvec3 dir = fs.world_from_cam * glm::normalize(glm::dvec3((x - camera.cx_px) / camera.fx_px,
+                                                                             (y - camera.cy_px) / camera.fy_px, 1.0));
+        constexpr double kFarM = 1000.0;
+        const double to_ground_m = dir.z < 0.0 ? -fs.eye.z / dir.z : kFarM;
+        points_w.push_back(fs.eye + std::min(to_ground_m, kFarM) * dir);
+      }
+    double most_px = 0.0;
+    for (const glm::dvec3& point_w : points_w) {
+      const glm::dvec3 in_a = a.R_cam_from_world * point_w + a.t_cam_from_world;
+      const glm::dvec3 in_b = b.R_cam_from_world * point_w + b.t_cam_from_world;
+      if (!(in_a.z > 0.0) || !(in_b.z > 0.0)) continue;
+      const glm::dvec2 moved(camera.fx_px * (in_b.x / in_b.z - in_a.x / in_a.z),
+                             camera.fy_px * (in_b.y / in_b.z - in_a.y / in_a.z));
+      most_px = std::max(most_px, glm::length(moved));
+    }
+    return most_px;
+  }
+
+  FrameState frameState(std::uint64_t frame) const {
+    FrameState fs;
+    placeCamera(fs, path->pose(frame));
     fs.lighting = lightingAt(frame);
     glm::dvec3 e_up = irradianceUp(fs.lighting);
     fs.ground_radiance_per_albedo = e_up / kPi;
@@ -1509,8 +1571,11 @@ struct World::Impl {
 
   // render()'s sensor model for a prepared frame state.
   // `exposure_ev`: stops from the scene's exposure (a bracket frame).
+  // `shutter_frames`: how long the shutter is open, in frame intervals
+  // (motion blur; 0: an instant).
   void renderFrame(const FrameState& fs, std::uint64_t frame_index, ImageRGB8& out, double exposure_ev = 0.0,
-                   const World::PixelWindow* window = nullptr, const glm::dvec3& channel_gain = glm::dvec3(1.0)) const {
+                   const World::PixelWindow* window = nullptr, const glm::dvec3& channel_gain = glm::dvec3(1.0),
+                   double shutter_frames = 0.0) const {
     out.resize(scene.camera.width_px, scene.camera.height_px);
     const glm::dvec3 scale = exposure * std::exp2(exposure_ev) * channel_gain;
     const float sigma = static_cast<float>(scene.noise_sigma_code);
@@ -1532,22 +1597,24 @@ struct World::Impl {
         pixels[pixel * 3 + c] = static_cast<std::uint8_t>(std::clamp(code, 0.0f, 255.0f) + 0.5f);
       }
     };
-    if (!(scene.lens_blur_sigma_px > 0.0)) {
+    const std::vector<FrameState> instants = shutterInstants(fs, frame_index, shutter_frames);
+    if (!(scene.lens_blur_sigma_px > 0.0) && instants.size() == 1) {
       traceFrame(fs, window, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
         sense(pixel, sum * scale);
       });
       return;
     }
-    renderBlurred(fs, window, scale, sense);
+    renderBlurred(instants, window, scale, sense);
   }
 
-  // The lens blur (SceneConfig::lens_blur_sigma_px) over the camera's linear
-  // light, then `sense` per pixel of the window. The window is traced grown
-  // by the kernel's radius (within the frame, whose edge pixels repeat
-  // outward), so each of its pixels is what the whole frame gives it.
+  // The camera's linear light averaged over the shutter's instants (motion
+  // blur), then the lens blur (SceneConfig::lens_blur_sigma_px) over it,
+  // then `sense` per pixel of the window. The window is traced grown by the
+  // kernel's radius (within the frame, whose edge pixels repeat outward),
+  // so each of its pixels is what the whole frame gives it.
   template <typename Sense>
-  void renderBlurred(const FrameState& fs, const World::PixelWindow* window, const glm::dvec3& scale,
-                     Sense sense) const {
+  void renderBlurred(const std::vector<FrameState>& instants, const World::PixelWindow* window,
+                     const glm::dvec3& scale, Sense sense) const {
     const int width = scene.camera.width_px, height = scene.camera.height_px;
     const std::vector<double> kernel = lensBlurKernel(scene.lens_blur_sigma_px);
     const int radius = static_cast<int>(kernel.size() / 2);
@@ -1563,9 +1630,11 @@ struct World::Impl {
     traced.y_begin = std::max(0, wanted.y_begin - radius);
     traced.y_end = std::min(height, wanted.y_end + radius);
     std::vector<glm::dvec3> linear(static_cast<size_t>(width) * height, glm::dvec3(0.0));
-    traceFrame(fs, &traced, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
-      linear[pixel] = sum * scale;
-    });
+    const glm::dvec3 instant_scale = scale / static_cast<double>(instants.size());
+    for (const FrameState& fs : instants)
+      traceFrame(fs, &traced, [&](size_t pixel, const glm::dvec3& sum, const std::vector<SceneObject>&) {
+        linear[pixel] += sum * instant_scale;
+      });
     auto at = [&](int x, int y) -> const glm::dvec3& {
       return linear[static_cast<size_t>(std::clamp(y, 0, height - 1)) * width + std::clamp(x, 0, width - 1)];
     };
@@ -1852,9 +1921,9 @@ FrameTruth World::truth(std::uint64_t frame_index) const {
 }
 
 void World::render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth, double exposure_ev,
-                   const glm::dvec3& channel_gain) const {
+                   const glm::dvec3& channel_gain, double shutter_frames) const {
   const Impl& w = *impl_;
-  w.renderFrame(w.frameState(frame_index), frame_index, out, exposure_ev, nullptr, channel_gain);
+  w.renderFrame(w.frameState(frame_index), frame_index, out, exposure_ev, nullptr, channel_gain, shutter_frames);
   truth = this->truth(frame_index);
 }
 

@@ -65,8 +65,12 @@ class World {
   // stops, as a bracket frame; the truth stays in the scene exposure's
   // camera linear units. `channel_gain` multiplies the linear light per
   // channel before the noise and the clip: a white balance's gains.
+  // `shutter_frames`: the shutter is open this many frame intervals,
+  // centred on the frame's time (the truth's pose is the middle of the
+  // exposure), and the camera's linear light is averaged over its poses
+  // along the camera path across it: motion blur (0: an instant).
   void render(std::uint64_t frame_index, ImageRGB8& out, FrameTruth& truth, double exposure_ev = 0.0,
-              const glm::dvec3& channel_gain = glm::dvec3(1.0)) const;
+              const glm::dvec3& channel_gain = glm::dvec3(1.0), double shutter_frames = 0.0) const;
   FrameTruth truth(std::uint64_t frame_index) const;
   PoseCamFromWorld pose(std::uint64_t frame_index) const;
   double exposure() const;

@@ -94,7 +94,7 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
   GpuStageTimer timer(report_, kStageName, finish_gpu_);
   std::string error;
   const bool object_drawn = track.found && maps.haveMaps();
-  const bool blurred = object_drawn && blur_edge_sigma_px_.has_value();
+  const bool blurred = object_drawn && (blur_edge_sigma_px_.has_value() || motion_smear_px_.has_value());
   if (blurred) {
     if (!blur_layer_.ready(camera_.width_px, camera_.height_px) &&
         !blur_layer_.init(camera_.width_px, camera_.height_px, camera_transfer_, error))
@@ -131,8 +131,9 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
       // (a model's layer), none where drawn one sample a pixel.
       const bool antialiased =
           object_.isModel() && model_renderer_.stats().edges.strategy != passes::EdgeStrategy::kOff;
-      blur_layer_.beginObject(region,
-                              passes::objectBlurSigmaPx(*blur_edge_sigma_px_, antialiased ? 1.0 / 12.0 : 0.0));
+      const double sigma_px =
+          blur_edge_sigma_px_ ? passes::objectBlurSigmaPx(*blur_edge_sigma_px_, antialiased ? 1.0 / 12.0 : 0.0) : 0.0;
+      blur_layer_.beginObject(region, sigma_px, motion_smear_px_.value_or(glm::dvec2(0.0)));
     }
     const bool drawn = drawObject(track, maps, lighting, error);
     if (!drawn) {

@@ -64,6 +64,10 @@ class ComposeStage {
   // given from now on (passes/object_blur.hpp); none: drawn sharp. With it,
   // the noise goes in after the blur.
   void setBlur(std::optional<double> edge_sigma_px) { blur_edge_sigma_px_ = edge_sigma_px; }
+  // The camera's motion over the exposure (stages/motion_match_stage.hpp):
+  // the object drawn from now on is smeared along it by the blur layer;
+  // none: not smeared.
+  void setMotionSmear(std::optional<glm::dvec2> smear_px) { motion_smear_px_ = smear_px; }
   // The camera's exposure and white balance now over those of the maps'
   // frame (stages/response_match_stage.hpp), per channel, for the object
   // drawn from now on.
@@ -103,6 +107,7 @@ class ComposeStage {
   passes::ModelRenderer model_renderer_;  // for a model
   const passes::SensorNoiseMatch* noise_ = nullptr;
   std::optional<double> blur_edge_sigma_px_;
+  std::optional<glm::dvec2> motion_smear_px_;
   glm::dvec3 response_gain_rgb_{1.0};
   std::optional<double> bloom_sigma_px_;
   passes::ObjectBloom bloom_;  // made on the first frame that blooms

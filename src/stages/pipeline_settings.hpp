@@ -165,6 +165,9 @@ struct CameraMatchConfig {
   // the field of view (a property of the lens, whatever the resolution).
   bool bloom = false;
   double bloom_sigma_deg = 0.5;
+  // While the camera moves, the object smeared along its on-screen
+  // velocity over the frame's exposure time (stages/motion_match_stage.hpp).
+  bool motion_blur = false;
 };
 
 struct PipelineSettings {

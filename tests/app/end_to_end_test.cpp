@@ -27,7 +27,9 @@
 #include "config/camera_file.hpp"
 #include "stages/state_store.hpp"
 #include "config/rig_file.hpp"
+#include "sim/camera_path.hpp"
 #include "sim/scene_config.hpp"
+#include "stages/scene_object.hpp"
 #include "sim/scene_geometry.hpp"
 #include "sim/world.hpp"
 
@@ -1034,6 +1036,71 @@ TEST_F(EndToEnd, BlurMatchMeasuresTheSimulatedLensAndShowsAsRunsAndSkips) {
   EXPECT_NEAR(report["camera_match"]["blur"]["edge_sigma_px"].get<double>(), std::sqrt(1.0 + 1.0 / 12.0), 0.07);
   EXPECT_EQ(report["stages"]["match_noise"]["skip_reasons"]["off"].get<int>(),
             frames - report["counters"].value("frames_in_bracket", 0));
+}
+
+// camera_match.motion_blur: the simulated camera pans (63 deg/s at its
+// fastest) with its shutter open for each frame's 10 ms; the stage finds
+// the object's smear from the tracked poses and the frames' exposure time.
+// The truth is the simulator's own: the object's centre projected with the
+// path's poses where the shutter opens and closes. The smear is velocity x
+// exposure at the frame's pose; a sine's second-order backward difference
+// over a 30 fps frame errs by (omega h)^2 / 3 = 1.5% of the speed at a 1 s
+// period, and the pose's smoothing trails by at most 0.1 px: 5% + 0.1 px.
+TEST_F(EndToEnd, MotionMatchFollowsTheSimulatedPanAndShowsAsRunsAndSkips) {
+  // The run's last frame, 15 (0.5 s), is the pan's fastest, going back.
+  const int frames = 16;
+  const fs::path config = dir_ / "motion.yaml";
+  std::ofstream(config) << "lights:\n  shadows: false\ncamera_match:\n  motion_blur: true\n"
+                        << "sim:\n  camera_path: pan\n  motion_blur: true\n";
+  const fs::path out = dir_ / "motion";
+  const CommandResult result = run("run --source sim --display headless --frames " + std::to_string(frames) +
+                                   " --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  const nlohmann::json& stage = report["stages"]["match_motion"];
+  EXPECT_EQ(stage["runs"].get<int>() + stage["skipped"].get<int>(), frames);
+  const int in_bracket = report["counters"].value("frames_in_bracket", 0);
+  // Every shown frame but the first runs: the pan never stops for a
+  // whole exposure within a frame (its slowest frames still move 3 px).
+  EXPECT_EQ(stage["skip_reasons"].value("no_previous_frame", 0), 1);
+  EXPECT_EQ(stage["skip_reasons"].value("exposure_bracket", 0), in_bracket);
+  EXPECT_GE(stage["runs"].get<int>(), frames - in_bracket - 3);
+
+  sim::SceneConfig scene = sim::defaultScene();
+  scene.camera_path.name = "pan";
+  const std::unique_ptr<sim::CameraPath> path = sim::makeCameraPath(scene);
+  SceneObject object;
+  ASSERT_TRUE(sceneObjectFromConfig(PipelineSettings{}, object).isOk());
+  const glm::dvec3 centre_w = object.shape.boundingCentre();
+  auto truthSmear = [&](double frame) {
+    constexpr double kShutterFrames = 10000.0 / (1e6 / 30.0);
+    const glm::dvec2 opens =
+        sim::projectWorldPoints(scene.camera, path->poseAt(frame - 0.5 * kShutterFrames), {centre_w})[0];
+    const glm::dvec2 closes =
+        sim::projectWorldPoints(scene.camera, path->poseAt(frame + 0.5 * kShutterFrames), {centre_w})[0];
+    return closes - opens;
+  };
+  const nlohmann::json& motion = report["camera_match"]["motion"];
+  const glm::dvec2 last(motion["last_smear_px"][0].get<double>(), motion["last_smear_px"][1].get<double>());
+  const glm::dvec2 truth = truthSmear(frames - 1);
+  double longest_truth = 0.0;
+  for (int frame = 1; frame < frames; ++frame) longest_truth = std::max(longest_truth, glm::length(truthSmear(frame)));
+  std::printf("motion: last frame's smear (%.3f, %.3f) px, truth (%.3f, %.3f); longest %.3f px, truth %.3f\n", last.x,
+              last.y, truth.x, truth.y, motion["longest_smear_px"].get<double>(), longest_truth);
+  ASSERT_GT(glm::length(truth), 5.0);
+  EXPECT_LT(glm::length(last - truth), 0.05 * glm::length(truth) + 0.1);
+  EXPECT_NEAR(motion["longest_smear_px"].get<double>(), longest_truth, 0.05 * longest_truth + 0.1);
+
+  // Off: every frame skips, and nothing is reported.
+  const fs::path out_off = dir_ / "motion_off";
+  std::ofstream(config) << "lights:\n  shadows: false\nsim:\n  camera_path: pan\n  motion_blur: true\n";
+  const CommandResult off = run("run --source sim --display headless --frames 4 --config " + config.string() +
+                                " --out " + out_off.string());
+  ASSERT_EQ(off.exit_status, 0) << off.stderr_text;
+  const nlohmann::json report_off = readReport(out_off);
+  EXPECT_EQ(report_off["stages"]["match_motion"]["runs"], 0);
+  EXPECT_EQ(report_off["stages"]["match_motion"]["skip_reasons"]["off"].get<int>(),
+            4 - report_off["counters"].value("frames_in_bracket", 0));
 }
 
 // The camera's own response: the simulated camera's auto exposure drops by

@@ -77,6 +77,61 @@ double fittedSpreadPx(const std::vector<std::pair<double, double>>& samples) {
   return best_s;
 }
 
+// A flat sphere (0.6 linear, shaded by ambient light alone) over a uniform
+// grey frame (code 60), the camera 0.6 m away on the sphere's axis with no
+// distortion: its silhouette is a circle of radius f R / sqrt(D^2 - R^2)
+// about the principal point. Drawn through `blur` into `target`.
+struct FlatSphereOverGrey {
+  static constexpr double kRadiusM = 0.04, kDistanceM = 0.6, kInsideLinear = 0.6;
+  static constexpr std::uint8_t kGreyCode = 60;
+  CameraIntrinsics camera;
+  glm::dvec3 centre_w{0.0, 0.0, 0.04};
+  PoseCamFromWorld pose;
+  double radius_px = 0.0;
+  gles::RenderTarget target;
+  passes::CameraFrameTexture background;
+  passes::EnvironmentMaps maps;
+  passes::ObjectCompositor compositor;
+  passes::ObjectBlurLayer blur;
+  ibl::SurfaceMaterial flat;
+  ibl::SceneLighting lighting;
+
+  bool init(const CameraIntrinsics& scene_camera, std::string& error) {
+    camera = scene_camera;
+    camera.distortion = {0, 0, 0, 0, 0};
+    pose = test::lookAt(centre_w + glm::dvec3(0.0, -kDistanceM * 0.8, kDistanceM * 0.6), centre_w);
+    radius_px = camera.fx_px * kRadiusM / std::sqrt(kDistanceM * kDistanceM - kRadiusM * kRadiusM);
+    const gles::Capabilities& caps = test::sharedCapabilities();
+    if (!target.init(camera.width_px, camera.height_px, error) || !background.init(caps, error) ||
+        !maps.init(caps, {}, error) || !compositor.init(caps, {}, maps.storage(), error) ||
+        !blur.init(camera.width_px, camera.height_px, ibl::CameraTransfer{}, error))
+      return false;
+    ImageRGB8 grey;
+    grey.resize(camera.width_px, camera.height_px);
+    std::fill(grey.pixels.begin(), grey.pixels.end(), kGreyCode);
+    flat.ambient = 1.0f;
+    flat.k_diffuse = 0.0f;
+    lighting.ambient_rgb = glm::vec3(static_cast<float>(kInsideLinear));
+    return background.upload(grey, error);
+  }
+  // The frame: the grey, then the sphere at `at_w` through the blur layer
+  // over `region` with `sigma_px` and `smear_px` (and `noise`, if any).
+  bool draw(const glm::dvec3& at_w, const passes::PixelRect& region, double sigma_px, const glm::dvec2& smear_px,
+            ImageRGB8& out, std::string& error, const passes::SensorNoiseMatch* noise = nullptr,
+            const passes::SensorNoiseTexture* noise_texture = nullptr) {
+    target.bind();
+    compositor.drawCameraBackground(background);
+    blur.beginObject(region, sigma_px, smear_px);
+    return compositor.drawSphereObject(camera, pose, at_w, kRadiusM, flat, lighting, maps, error) &&
+           blur.composite(noise, noise_texture, error) && target.readRGB(out, error);
+  }
+  // Linear light between the grey (0) and the sphere (1), green.
+  static double level(const ImageRGB8& image, int x, int y) {
+    const double outside = ibl::srgbToLinear(kGreyCode / 255.0);
+    return (ibl::srgbToLinear(image.row(y)[3 * x + 1] / 255.0) - outside) / (kInsideLinear - outside);
+  }
+};
+
 class BlurredObject : public GpuTest, public ::testing::WithParamInterface<double> {};
 
 TEST_P(BlurredObject, SilhouetteSpreadsAsTheTagsEdge) {
@@ -96,60 +151,29 @@ TEST_P(BlurredObject, SilhouetteSpreadsAsTheTagsEdge) {
       ibl::EdgeBlurSettings{});
   ASSERT_EQ(tag.status, ibl::EdgeBlurStatus::kMeasured) << tag.message;
 
-  // A flat white sphere over a uniform grey, the camera on its axis (no
-  // distortion): its silhouette is a circle of radius f R / sqrt(D^2 - R^2).
-  CameraIntrinsics camera = scene.camera;
-  camera.distortion = {0, 0, 0, 0, 0};
-  const glm::dvec3 centre_w(0.0, 0.0, 0.04);
-  const double radius_m = 0.04, distance_m = 0.6;
-  const PoseCamFromWorld pose = test::lookAt(centre_w + glm::dvec3(0.0, -distance_m * 0.8, distance_m * 0.6), centre_w);
-  const double radius_px = camera.fx_px * radius_m / std::sqrt(distance_m * distance_m - radius_m * radius_m);
-  const glm::dvec2 centre_px(camera.cx_px, camera.cy_px);
-  const gles::Capabilities& caps = test::sharedCapabilities();
+  FlatSphereOverGrey rig;
   std::string error;
-  gles::RenderTarget target;
-  passes::CameraFrameTexture background;
-  passes::EnvironmentMaps maps;
-  passes::ObjectCompositor compositor;
-  passes::ObjectBlurLayer blur;
-  ASSERT_TRUE(target.init(camera.width_px, camera.height_px, error)) << error;
-  ASSERT_TRUE(background.init(caps, error)) << error;
-  ASSERT_TRUE(maps.init(caps, {}, error)) << error;
-  ASSERT_TRUE(compositor.init(caps, {}, maps.storage(), error)) << error;
-  ASSERT_TRUE(blur.init(camera.width_px, camera.height_px, ibl::CameraTransfer{}, error)) << error;
-  ImageRGB8 grey;
-  grey.resize(camera.width_px, camera.height_px);
-  std::fill(grey.pixels.begin(), grey.pixels.end(), std::uint8_t{60});
-  ASSERT_TRUE(background.upload(grey, error)) << error;
-  ibl::SurfaceMaterial flat;
-  flat.ambient = 1.0f;
-  flat.k_diffuse = 0.0f;
-  ibl::SceneLighting lighting;
-  lighting.ambient_rgb = glm::vec3(0.6f);
+  ASSERT_TRUE(rig.init(scene.camera, error)) << error;
+  const CameraIntrinsics& camera = rig.camera;
+  const double radius_px = rig.radius_px;
+  const glm::dvec2 centre_px(camera.cx_px, camera.cy_px);
   // The sphere is drawn one sample a pixel: its own edge has no spread, so
   // it takes the tag's whole.
   const double sigma_px = passes::objectBlurSigmaPx(tag.edge_sigma_px, 0.0);
-  target.bind();
-  compositor.drawCameraBackground(background);
   const int reach = static_cast<int>(radius_px) + 3;
-  blur.beginObject(passes::PixelRect{static_cast<int>(centre_px.x) - reach, static_cast<int>(centre_px.y) - reach,
-                                     2 * reach, 2 * reach},
-                   sigma_px);
-  ASSERT_TRUE(compositor.drawSphereObject(camera, pose, centre_w, radius_m, flat, lighting, maps, error)) << error;
-  ASSERT_TRUE(blur.composite(nullptr, nullptr, error)) << error;
+  const passes::PixelRect region{static_cast<int>(centre_px.x) - reach, static_cast<int>(centre_px.y) - reach,
+                                 2 * reach, 2 * reach};
   ImageRGB8 out;
-  ASSERT_TRUE(target.readRGB(out, error)) << error;
+  ASSERT_TRUE(rig.draw(rig.centre_w, region, sigma_px, glm::dvec2(0.0), out, error)) << error;
 
   // The silhouette's radial profile, in linear light, normalised between the
   // grey (0) and the sphere (1).
-  const double outside = ibl::srgbToLinear(60.0 / 255.0), inside = 0.6;
   std::vector<std::pair<double, double>> samples;
   for (int y = 0; y < camera.height_px; ++y)
     for (int x = 0; x < camera.width_px; ++x) {
       const double d = radius_px - glm::length(glm::dvec2(x, y) - centre_px);  // + inside
       if (std::abs(d) > 6.0) continue;
-      const double linear = ibl::srgbToLinear(out.row(y)[3 * x + 1] / 255.0);
-      samples.emplace_back(d, (linear - outside) / (inside - outside));
+      samples.emplace_back(d, FlatSphereOverGrey::level(out, x, y));
     }
   ASSERT_GT(samples.size(), 1000u);
   const double object_spread = fittedSpreadPx(samples);
@@ -168,15 +192,8 @@ TEST_P(BlurredObject, SilhouetteSpreadsAsTheTagsEdge) {
   noise.model.dark_sigma_code = noise.model.bright_sigma_code = glm::dvec3(2.0);
   passes::SensorNoiseTexture noise_texture;
   ASSERT_TRUE(noise_texture.init(error)) << error;
-  target.bind();
-  compositor.drawCameraBackground(background);
-  blur.beginObject(passes::PixelRect{static_cast<int>(centre_px.x) - reach, static_cast<int>(centre_px.y) - reach,
-                                     2 * reach, 2 * reach},
-                   sigma_px);
-  ASSERT_TRUE(compositor.drawSphereObject(camera, pose, centre_w, radius_m, flat, lighting, maps, error)) << error;
-  ASSERT_TRUE(blur.composite(&noise, &noise_texture, error)) << error;
   ImageRGB8 noisy;
-  ASSERT_TRUE(target.readRGB(noisy, error)) << error;
+  ASSERT_TRUE(rig.draw(rig.centre_w, region, sigma_px, glm::dvec2(0.0), noisy, error, &noise, &noise_texture)) << error;
   double sum2 = 0.0;
   int interior = 0, outside_changed = 0;
   for (int y = 0; y < camera.height_px; ++y)
@@ -197,6 +214,102 @@ TEST_P(BlurredObject, SilhouetteSpreadsAsTheTagsEdge) {
 }
 
 INSTANTIATE_TEST_SUITE_P(LensBlur, BlurredObject, ::testing::Values(0.5, 1.0, 1.5));
+
+}  // namespace
+}  // namespace probelight
+
+namespace probelight {
+namespace {
+
+TEST(MotionSmearTaps, KeepTheirSpacingUnderAPixelAndSpanTheSmear) {
+  for (const glm::dvec2 smear : {glm::dvec2(0.6, 0.0), glm::dvec2(7.0, -3.0), glm::dvec2(0.0, 32.5)}) {
+    const passes::MotionSmearTaps taps = passes::motionSmearTaps(smear);
+    const double spacing = glm::length(taps.step_px);
+    EXPECT_LT(spacing, 1.0) << smear.x << "," << smear.y;
+    // 2 taps + 1 samples at the middles of as many parts of the smear.
+    EXPECT_NEAR(spacing * (2 * taps.taps + 1), glm::length(smear), 1e-9);
+  }
+  EXPECT_EQ(passes::motionSmearTaps(glm::dvec2(0.0)).taps, 0);
+  EXPECT_EQ(passes::motionSmearTaps(glm::dvec2(std::nan(""), 1.0)).taps, 0);
+  EXPECT_EQ(passes::motionSmearTaps(glm::dvec2(500.0, 0.0)).taps, passes::kMaxMotionSmearTaps);
+}
+
+// The camera's motion over the exposure, given to the object: a flat disk
+// composited through the blur layer with a smear must be the same disk
+// drawn sharp and then averaged, on the CPU, over the smear's continuous
+// segment (in linear light, bilinear between pixel centres). The midpoint
+// rule over 2 taps + 1 samples under a pixel apart errs by at most
+// h^2 / (8 L) per kink of the bilinear profile (h the spacing, L the
+// smear's length; a sharp edge's profile has a kink a pixel, two on the
+// segment's way across it): 0.03 at L = 9.8, with the layers' 8-bit
+// rounding (half a code a pass) on top.
+class SmearedObject : public GpuTest {};
+
+TEST_F(SmearedObject, IsTheSharpObjectAveragedAlongTheSmear) {
+  FlatSphereOverGrey rig;
+  std::string error;
+  ASSERT_TRUE(rig.init(sim::defaultScene().camera, error)) << error;
+  const CameraIntrinsics& camera = rig.camera;
+  const glm::dvec2 smear_px(9.0, -4.0);  // right and up the image
+  // The object's bounds, tight as the compose stage's (projectedBounds, 2 px margin).
+  const int reach = static_cast<int>(std::ceil(rig.radius_px)) + 2;
+  const passes::PixelRect region{static_cast<int>(camera.cx_px) - reach, static_cast<int>(camera.cy_px) - reach,
+                                 2 * reach, 2 * reach};
+  // Compared over the region grown past all the smear can reach.
+  const int margin = 12;
+  // An earlier frame's object 25 px to the right (0.025 m at 0.6 m and
+  // f 600), smeared too, drawn over its own region: the layers keep it
+  // where this frame does not write, and none of it may be read into this
+  // frame's (a moving object's old place bleeding in).
+  const glm::dvec3 earlier_w = rig.centre_w + glm::dvec3(0.025, 0.0, 0.0);
+  const passes::PixelRect earlier_region{region.x + 25, region.y, region.width, region.height};
+  ImageRGB8 sharp, smeared, earlier;
+  ASSERT_TRUE(rig.draw(earlier_w, earlier_region, 0.0, smear_px, earlier, error)) << error;
+  ASSERT_TRUE(rig.draw(rig.centre_w, region, 0.0, glm::dvec2(0.0), sharp, error)) << error;
+  ASSERT_TRUE(rig.draw(earlier_w, earlier_region, 0.0, smear_px, earlier, error)) << error;
+  ASSERT_TRUE(rig.draw(rig.centre_w, region, 0.0, smear_px, smeared, error)) << error;
+
+  auto level = [](const ImageRGB8& image, int x, int y) { return FlatSphereOverGrey::level(image, x, y); };
+  auto bilinear = [&](double x, double y) {
+    const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+    const double fx = x - x0, fy = y - y0;
+    return (1 - fy) * ((1 - fx) * level(sharp, x0, y0) + fx * level(sharp, x0 + 1, y0)) +
+           fy * ((1 - fx) * level(sharp, x0, y0 + 1) + fx * level(sharp, x0 + 1, y0 + 1));
+  };
+  constexpr int kSegmentSamples = 400;
+  double worst = 0.0, worst_mirrored = 0.0, sum_sharp = 0.0, sum_smeared = 0.0;
+  int changed_outside = 0;
+  for (int y = region.y - margin; y < region.y + region.height + margin; ++y)
+    for (int x = region.x - margin; x < region.x + region.width + margin; ++x) {
+      double expected = 0.0, mirrored = 0.0;
+      for (int m = 0; m < kSegmentSamples; ++m) {
+        const double t = (m + 0.5) / kSegmentSamples - 0.5;
+        expected += bilinear(x - t * smear_px.x, y - t * smear_px.y);
+        mirrored += bilinear(x - t * smear_px.x, y + t * smear_px.y);
+      }
+      expected /= kSegmentSamples;
+      mirrored /= kSegmentSamples;
+      const double got = level(smeared, x, y);
+      worst = std::max(worst, std::abs(got - expected));
+      worst_mirrored = std::max(worst_mirrored, std::abs(got - mirrored));
+      sum_sharp += level(sharp, x, y);
+      sum_smeared += got;
+    }
+  for (int y = 0; y < camera.height_px; ++y)
+    for (int x = 0; x < camera.width_px; ++x)
+      if (x < region.x - margin || x >= region.x + region.width + margin || y < region.y - margin ||
+          y >= region.y + region.height + margin)
+        changed_outside += smeared.row(y)[3 * x + 1] != sharp.row(y)[3 * x + 1];
+  std::printf("smear (%.0f, %.0f) px: worst %.4f of the contrast against the CPU's (%.4f with the smear mirrored), "
+              "light kept %.4f\n",
+              smear_px.x, smear_px.y, worst, worst_mirrored, sum_smeared / sum_sharp);
+  EXPECT_LT(worst, 0.03);
+  // The direction matters: up-right is not down-right.
+  EXPECT_GT(worst_mirrored, 0.2);
+  // Averaging moves light, it neither makes nor loses it.
+  EXPECT_NEAR(sum_smeared / sum_sharp, 1.0, 0.005);
+  EXPECT_EQ(changed_outside, 0);
+}
 
 }  // namespace
 }  // namespace probelight

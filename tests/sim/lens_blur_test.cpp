@@ -52,28 +52,10 @@ SceneConfig squareOnScene(double blur_sigma_px) {
   return scene;
 }
 
-// The variance (px^2) of the edge's line spread along the rows: the green
-// channel's linear light differenced along x over x0 - 6..x0 + 6, its second
-// moment about its mean, averaged over the rows of the edge's middle (the
-// white ring's outer edge is 12.5 px further out).
+// The edge's spread (testing::edgeSpreadVariance) over x0 +- 6 (the white
+// ring's outer edge is 12.5 px further out).
 double edgeSpreadVariance(const ImageRGB8& image, int x0, int y_begin, int y_end) {
-  double total = 0.0;
-  int rows = 0;
-  for (int y = y_begin; y < y_end; ++y) {
-    double weight = 0.0, first = 0.0, second = 0.0;
-    for (int x = x0 - 6; x < x0 + 6; ++x) {
-      const double step = testing::pixelLinear(image, x, y, 1) - testing::pixelLinear(image, x + 1, y, 1);
-      const double at = x + 0.5;
-      weight += step;
-      first += step * at;
-      second += step * at * at;
-    }
-    if (!(weight > 0.0)) continue;
-    const double mean = first / weight;
-    total += second / weight - mean * mean;
-    ++rows;
-  }
-  return rows > 0 ? total / rows : -1.0;
+  return testing::edgeSpreadVariance(image, x0, 6, y_begin, y_end);
 }
 
 TEST(LensBlur, AddsItsKernelsVarianceToTheEdgesSpread) {

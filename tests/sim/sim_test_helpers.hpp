@@ -40,6 +40,31 @@ inline MaskMoments coverageMoments(const std::vector<float>& coverage, int width
   return m;
 }
 
+// The variance (px^2) of an edge's line spread along the rows: the green
+// channel's linear light differenced along x over x0 - reach .. x0 +
+// reach, its second moment about its mean, averaged over rows [y_begin,
+// y_end) (a falling edge, bright on the left; rows with no fall skipped).
+// -1 when no row has one.
+inline double edgeSpreadVariance(const ImageRGB8& image, int x0, int reach, int y_begin, int y_end) {
+  double total = 0.0;
+  int rows = 0;
+  for (int y = y_begin; y < y_end; ++y) {
+    double weight = 0.0, first = 0.0, second = 0.0;
+    for (int x = x0 - reach; x < x0 + reach; ++x) {
+      const double step = pixelLinear(image, x, y, 1) - pixelLinear(image, x + 1, y, 1);
+      const double at = x + 0.5;
+      weight += step;
+      first += step * at;
+      second += step * at * at;
+    }
+    if (!(weight > 0.0)) continue;
+    const double mean = first / weight;
+    total += second / weight - mean * mean;
+    ++rows;
+  }
+  return rows > 0 ? total / rows : -1.0;
+}
+
 // Small and fast: for tests that do not need the full 640x480 frame.
 inline SceneConfig smallScene() {
   SceneConfig scene = defaultScene();
