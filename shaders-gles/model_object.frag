@@ -90,6 +90,8 @@ uniform float u_alpha_cutoff;
 // ibl::SceneLighting's clipped lights, added to the diffuse light.
 uniform vec3 u_clipped_direction_w[4];
 uniform vec3 u_clipped_diffuse_rgb[4];
+uniform vec3 u_lamp_direction_w;  // a virtual lamp, seen from the object's middle (ibl::SceneLighting)
+uniform vec3 u_lamp_diffuse_rgb;
 
 #ifdef BASE_COLOR_TEXTURE
 uniform sampler2D u_base_color_texture;
@@ -369,6 +371,7 @@ void main() {
 
   vec3 diffuse = sampleCubeBilinear(u_diffuse_map, n, u_diffuse_face_size, u_diffuse_scale).rgb;
   for (int k = 0; k < 4; ++k) diffuse += u_clipped_diffuse_rgb[k] * max(dot(n, u_clipped_direction_w[k]), 0.0);
+  diffuse += u_lamp_diffuse_rgb * max(dot(n, u_lamp_direction_w), 0.0);
 
   vec3 mirror = reflect(-to_eye, n);
   vec3 floor_fraction = vec3(1.0);

@@ -47,6 +47,8 @@ uniform vec3 u_highlight_rgb;
 // holds it).
 uniform vec3 u_clipped_direction_w[4];
 uniform vec3 u_clipped_diffuse_rgb[4];
+uniform vec3 u_lamp_direction_w;  // a virtual lamp, seen from the object's middle (ibl::SceneLighting)
+uniform vec3 u_lamp_diffuse_rgb;
 
 #ifndef REFLECTION_LOWER_RUNG
 #define REFLECTION_LOWER_RUNG 0
@@ -81,6 +83,7 @@ void main() {
   vec3 mirror = reflect(-to_eye, n);
   vec3 diffuse = sampleCubeBilinear(u_diffuse_map, n, u_diffuse_face_size, u_diffuse_scale).rgb;
   for (int k = 0; k < 4; ++k) diffuse += u_clipped_diffuse_rgb[k] * max(dot(n, u_clipped_direction_w[k]), 0.0);
+  diffuse += u_lamp_diffuse_rgb * max(dot(n, u_lamp_direction_w), 0.0);
   // ladderRung's kind is a constant here, so the compiler keeps only that
   // rung's lookup.
   vec3 reflection = ladderRung(REFLECTION_LOWER_RUNG, mirror, diffuse);

@@ -225,6 +225,24 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.camera_match.motion_blur = camera_match.readBool("motion_blur", settings.camera_match.motion_blur);
   camera_match.rejectUnknownFields();
 
+  ConfigReader lamp_section = file.section("virtual_lamp");
+  VirtualLampConfig& lamp = settings.virtual_lamp;
+  lamp.enabled = lamp_section.readBool("enabled", lamp.enabled);
+  lamp.lamp.position_w = lamp_section.readVec3("position", lamp.lamp.position_w, Range::closed(-5.0, 5.0));
+  lamp.lamp.colour = lamp_section.readVec3("colour", lamp.lamp.colour, Range::closed(0.0, 100.0));
+  lamp.lamp.intensity = lamp_section.readDouble("intensity", lamp.lamp.intensity, Range::closed(0.0, 100.0));
+  lamp.lamp.spot_direction_w =
+      lamp_section.readVec3("spot_direction", lamp.lamp.spot_direction_w, Range::closed(-1.0, 1.0));
+  lamp.lamp.spot_half_angle_deg =
+      lamp_section.readDouble("spot_half_angle_deg", lamp.lamp.spot_half_angle_deg, Range::openClosed(0.0, 180.0));
+  lamp.lamp.spot_softness_deg =
+      lamp_section.readDouble("spot_softness_deg", lamp.lamp.spot_softness_deg, Range::closed(0.0, 90.0));
+  // What the ranges cannot say (above the ground, a direction not zero).
+  if (const std::optional<ibl::VirtualLampProblem> problem = ibl::virtualLampProblem(lamp.lamp))
+    throw config::ConfigError(lamp_section.path() + ": field '" + lamp_section.fieldName(problem->field) +
+                              "': " + problem->message);
+  lamp_section.rejectUnknownFields();
+
   ConfigReader sim = file.section("sim");
   settings.sim.env = sim.readString("env", settings.sim.env);
   settings.sim.camera_path = sim.readString("camera_path", settings.sim.camera_path);

@@ -35,6 +35,7 @@
 #include "sim/world.hpp"
 #include "stages/compose_stage.hpp"
 #include "stages/blur_match_stage.hpp"
+#include "stages/lamp_exposure.hpp"
 #include "stages/motion_match_stage.hpp"
 #include "stages/noise_match_stage.hpp"
 #include "stages/response_match_stage.hpp"
@@ -166,6 +167,8 @@ class Kiosk {
     noise_->run(ctx.track, ctx.frame, ctx.number);
     blur_->run(ctx.track, ctx.frame);
     motion_->run(ctx.track, ctx.frame.metadata, ctx.time_s);
+    lamp_exposure_->run(ctx.track.found && maps_->haveMaps(), ctx.track.pose, ctx.frame,
+                        lights_->roomGroundIrradiance(), ctx.time_s);
     PROBELIGHT_TRY(show(ctx.track, ctx.status, ctx.number));
     last_track_ = ctx.track;
     last_frame_number_ = ctx.number;
@@ -195,6 +198,8 @@ class Kiosk {
     compose_->setSensorNoise(noise_->match());
     compose_->setBlur(blur_->edgeSigmaPx());
     compose_->setMotionSmear(motion_->smearPx());
+    compose_->setRoomLight(lights_->roomGroundIrradiance());
+    compose_->setExposureGain(lamp_exposure_->gain());
     PROBELIGHT_TRY(compose_->draw(track, status, upload_->texture(), *maps_, *shadows_, lights_->sceneLighting()));
     return present(status, frame_number, log_status_change);
   }
@@ -211,6 +216,7 @@ class Kiosk {
     noise_->skip(kReason);
     blur_->skip(kReason);
     motion_->skip(kReason);
+    lamp_exposure_->skip(kReason);
     // The display's frame already holds the kept frame with this status
     // (nothing was drawn since): it is shown again, not drawn again.
     if (kept_frame_status_ == status) {
@@ -450,6 +456,7 @@ class Kiosk {
     shadows_ = std::make_unique<ShadowsStage>(settings, object.shape, report_);
     compose_ = std::make_unique<ComposeStage>(object, inputs_.camera, inputs_.rig, settings.maps.stages.camera_transfer,
                                               report_, settings.gpu_finish);
+    compose_->setVirtualLamp(settings.virtual_lamp);
     if (settings.camera_match.bloom) {
       // The lens's glare spread, from degrees of the field to the frame's pixels.
       const double sigma_rad = settings.camera_match.bloom_sigma_deg * M_PI / 180.0;
@@ -461,6 +468,8 @@ class Kiosk {
                                              settings.maps.stages.camera_transfer, report_);
     motion_ = std::make_unique<MotionMatchStage>(settings.camera_match, inputs_.camera,
                                                  object.shape.boundingCentre(), report_);
+    lamp_exposure_ = std::make_unique<LampExposureStage>(settings.virtual_lamp.enabled, settings.virtual_lamp.lamp,
+                                                         inputs_.camera, settings.maps.stages.camera_transfer, report_);
     if (world_) truth_ = std::make_unique<TruthMonitor>(world_, report_);
     PROBELIGHT_TRY(upload_->init(capabilities_));
     PROBELIGHT_TRY(maps_->init(capabilities_));
@@ -629,6 +638,7 @@ class Kiosk {
   std::unique_ptr<NoiseMatchStage> noise_;
   std::unique_ptr<BlurMatchStage> blur_;
   std::unique_ptr<MotionMatchStage> motion_;
+  std::unique_ptr<LampExposureStage> lamp_exposure_;
   std::unique_ptr<ComposeStage> compose_;
   std::unique_ptr<TruthMonitor> truth_;
 

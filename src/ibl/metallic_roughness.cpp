@@ -163,6 +163,7 @@ glm::vec3 shadeMetallicRoughness(const glm::vec3& normal_w, const glm::vec3& to_
   glm::vec3 diffuse = diffuse_map.face_size > 0 ? diffuse_map.sampleBilinear(glm::dvec3(normal_w)) : glm::vec3(0);
   for (int k = 0; k < SceneLighting::kMaxClippedLights; ++k)
     diffuse += lighting.clipped_diffuse_rgb[k] * std::max(0.0f, glm::dot(normal_w, lighting.clipped_direction_w[k]));
+  diffuse += lighting.lamp_diffuse_rgb * std::max(0.0f, glm::dot(normal_w, lighting.lamp_direction_w));
   glm::vec3 mirror_w = glm::reflect(-to_eye_w, normal_w);
   glm::vec3 floor_fraction(1.0f);
   glm::vec4 camera_floor(0.0f);

@@ -31,6 +31,7 @@ glm::vec3 shadeSurface(const glm::vec3& normal_w, const glm::vec3& to_eye_w, con
   glm::vec3 diffuse = diffuse_map.face_size > 0 ? diffuse_map.sampleBilinear(glm::dvec3(normal_w)) : glm::vec3(0);
   for (int k = 0; k < SceneLighting::kMaxClippedLights; ++k)
     diffuse += lighting.clipped_diffuse_rgb[k] * std::max(0.0f, glm::dot(normal_w, lighting.clipped_direction_w[k]));
+  diffuse += lighting.lamp_diffuse_rgb * std::max(0.0f, glm::dot(normal_w, lighting.lamp_direction_w));
   const int levels = static_cast<int>(glossy_maps.size());
   const auto rung = [&](int k) -> glm::vec3 {
     if (k >= levels + 1) return diffuse;

@@ -66,6 +66,12 @@ struct SceneLighting {
   // kept as fitted; this brings them into the maps' units, as the fields
   // above already are (stages/frame_response.hpp).
   glm::vec3 dome_rgb_scale{1.0f};
+  // A virtual lamp (ibl/virtual_lamp.hpp) as the object sees it from its
+  // middle: added to the diffuse map's value at n as lamp_diffuse_rgb *
+  // max(0, n . lamp_direction_w), in the diffuse map's units (E / pi); 0:
+  // no lamp.
+  glm::vec3 lamp_direction_w{0.0f, 0.0f, 1.0f};
+  glm::vec3 lamp_diffuse_rgb{0.0f};
 };
 
 // normal_w and to_eye_w are unit vectors in W. Maps are sampled bilinearly.

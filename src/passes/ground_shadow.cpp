@@ -477,11 +477,17 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   const std::vector<bool> cells = darkeningCells(*fraction, ground_size, segments);
   std::vector<GLushort> indices;
   const auto at = [&](int a, int b) { return static_cast<GLushort>(b * (segments + 1) + a); };
+  glm::ivec2 first_cell(segments), last_cell(-1);
   for (int j = 0; j < segments; ++j)
     for (int i = 0; i < segments; ++i)
-      if (cells[static_cast<std::size_t>(j) * segments + i])
+      if (cells[static_cast<std::size_t>(j) * segments + i]) {
         indices.insert(indices.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        first_cell = glm::min(first_cell, glm::ivec2(i, j));
+        last_cell = glm::max(last_cell, glm::ivec2(i, j));
+      }
   region_index_count_ = static_cast<GLsizei>(indices.size());
+  darkened_low_w_ = region_.centre_w + region_.half_size_m * (2.0 * glm::dvec2(first_cell) / static_cast<double>(segments) - 1.0);
+  darkened_high_w_ = region_.centre_w + region_.half_size_m * (2.0 * glm::dvec2(last_cell + 1) / static_cast<double>(segments) - 1.0);
   if (indices.empty()) return true;  // nothing darkens the ground by a step: nothing to draw
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, region_indices_.id());
   glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLushort)), indices.data(),
@@ -491,10 +497,24 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   return gles::checkGl("ground shadow cells", error);
 }
 
+void setGroundLampUniforms(const gles::Program& program, const GroundLampTerm& lamp) {
+  glUniform3fv(program.uniform("u_lamp_w"), 1, glm::value_ptr(lamp.position_w));
+  glUniform3fv(program.uniform("u_lamp_ratio_at_one_metre"), 1, glm::value_ptr(lamp.ratio_at_one_metre));
+  glUniform3fv(program.uniform("u_spot_direction_w"), 1, glm::value_ptr(lamp.spot_direction_w));
+  glUniform2fv(program.uniform("u_spot_cosines"), 1, glm::value_ptr(lamp.spot_cosines));
+  glUniform1f(program.uniform("u_spot"), lamp.spot ? 1.0f : 0.0f);
+}
+
 bool GroundShadow::drawOnCameraImage(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
-                                     const CameraFrameTexture& camera_frame, std::string& error) {
+                                     const CameraFrameTexture& camera_frame, std::string& error, double exposure_gain,
+                                     const GroundLampTerm* lamp) {
   if (!has_shadow_) return true;
   composite_program_.use();
+  glUniform1f(composite_program_.uniform("u_exposure_gain"), static_cast<float>(exposure_gain));
+  setGroundLampUniforms(composite_program_, lamp != nullptr ? *lamp : GroundLampTerm{});
+  glUniform2f(composite_program_.uniform("u_ground_centre_w"), static_cast<float>(region_.centre_w.x),
+              static_cast<float>(region_.centre_w.y));
+  glUniform1f(composite_program_.uniform("u_ground_half_size_m"), static_cast<float>(region_.half_size_m));
   glUniform2f(composite_program_.uniform("u_region_centre_w"), static_cast<float>(region_.centre_w.x),
               static_cast<float>(region_.centre_w.y));
   glUniform1f(composite_program_.uniform("u_region_half_size_m"), static_cast<float>(region_.half_size_m));

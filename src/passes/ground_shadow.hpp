@@ -20,6 +20,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -60,6 +61,19 @@ struct SelfShadowLight {
   float width_m = 0.0f;             // and width
 };
 
+// A virtual lamp's light on the ground as the composites add it
+// (virtual_lamp.glsl; passes/virtual_lamp_light makes it): the ratio at
+// 1 m below the lamp (0: no lamp) and the spot.
+struct GroundLampTerm {
+  glm::vec3 position_w{0.0f, 0.0f, 1.0f};
+  glm::vec3 ratio_at_one_metre{0.0f};
+  glm::vec3 spot_direction_w{0.0f, 0.0f, -1.0f};
+  glm::vec2 spot_cosines{-2.0f, -1.5f};
+  bool spot = false;
+};
+// Sets virtual_lamp.glsl's uniforms on `program` (in use).
+void setGroundLampUniforms(const gles::Program& program, const GroundLampTerm& lamp);
+
 class GroundShadow {
  public:
   bool init(const gles::Capabilities& capabilities, const GroundShadowSettings& settings, std::string& error);
@@ -74,8 +88,11 @@ class GroundShadow {
   // the bound framebuffer (which holds the camera background, drawn 1:1):
   // only the part of the square the shadow darkens by at least one 8-bit
   // step. Nothing when there is no shadow.
+  // exposure_gain: the frame darkened, as drawCameraBackground's; `lamp`:
+  // a virtual lamp's light added to the fraction there (none: no lamp).
   bool drawOnCameraImage(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
-                         const CameraFrameTexture& camera_frame, std::string& error);
+                         const CameraFrameTexture& camera_frame, std::string& error, double exposure_gain = 1.0,
+                         const GroundLampTerm* lamp = nullptr);
 
   bool hasShadow() const { return has_shadow_; }
   // The lights of the last update with their near-side maps (empty unless
@@ -91,6 +108,10 @@ class GroundShadow {
   const std::vector<SelfShadowLight>& floorSelfShadows() const { return floor_self_shadows_; }
   int shadowMapSizePx() const { return settings_.shadow_map_size_px; }
   const ibl::GroundRegion& region() const { return region_; }
+  // The ground rectangle (W metres, low and high corners) of the cells the
+  // composite draws: where the shadow darkens by a step. Meaningful while
+  // hasShadow().
+  std::pair<glm::dvec2, glm::dvec2> darkenedBoundsW() const { return {darkened_low_w_, darkened_high_w_}; }
   // The fraction texture (RGBA8, LINEAR, over region()), for a model's
   // reflection of the floor beside it (ModelRenderer::setNearFloor); only
   // meaningful while hasShadow().
@@ -138,6 +159,7 @@ class GroundShadow {
   gles::Buffer region_indices_;
   GLsizei region_index_count_ = 0;
   ibl::GroundRegion region_;
+  glm::dvec2 darkened_low_w_{0.0}, darkened_high_w_{0.0};
   bool has_shadow_ = false;
   int shadow_passes_last_update_ = 0;
 };

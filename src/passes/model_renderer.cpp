@@ -694,6 +694,8 @@ bool ModelRenderer::drawPiece(const Piece& piece, const CameraIntrinsics& camera
                glm::value_ptr(lighting.clipped_direction_w[0]));
   glUniform3fv(program.uniform("u_clipped_diffuse_rgb"), ibl::SceneLighting::kMaxClippedLights,
                glm::value_ptr(lighting.clipped_diffuse_rgb[0]));
+  glUniform3fv(program.uniform("u_lamp_direction_w"), 1, glm::value_ptr(lighting.lamp_direction_w));
+  glUniform3fv(program.uniform("u_lamp_diffuse_rgb"), 1, glm::value_ptr(lighting.lamp_diffuse_rgb));
 
   if (material.double_sided)
     glDisable(GL_CULL_FACE);

@@ -63,6 +63,11 @@ bool ObjectCompositor::init(const gles::Capabilities& /*capabilities*/, const Ob
   auto image_program = gles::Program::fromEmbedded("image_quad.vert", "image_quad.frag", "", error);
   if (!image_program) return false;
   image_program_ = std::move(*image_program);
+  auto darkened = gles::Program::fromEmbedded("image_quad.vert", "image_quad.frag",
+                                              "#define EXPOSURE_GAIN\n" + cameraTransferDefines(settings.camera_transfer),
+                                              error);
+  if (!darkened) return false;
+  darkened_image_program_ = std::move(*darkened);
   // The mirror-only programs (glossiness 1, the default) now, so a shader
   // that does not build fails init; other rungs' programs on first use.
   shading_programs_.clear();
@@ -131,12 +136,19 @@ const gles::Program* ObjectCompositor::shadingProgram(ObjectShape shape, const R
   return &shading_programs_.emplace(key, std::move(*program)).first->second;
 }
 
-void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_frame) {
+void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_frame, double exposure_gain) {
   glDepthMask(GL_TRUE);
   glClear(GL_DEPTH_BUFFER_BIT);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
-  image_program_.use();
+  // The bytes as they are, or through linear light when darkened.
+  const gles::Program& program = exposure_gain == 1.0 ? image_program_ : darkened_image_program_;
+  program.use();
+  if (exposure_gain != 1.0) {
+    glUniform1f(program.uniform("u_exposure_gain"), static_cast<float>(exposure_gain));
+    if (settings_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma)
+      glUniform1f(program.uniform("u_camera_gamma"), static_cast<float>(settings_.camera_transfer.gamma));
+  }
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, camera_frame.texture());
   // Drawn 1:1, every lookup at a texel centre: NEAREST gives the same
@@ -144,8 +156,8 @@ void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_fra
   // 640x480). The texture's own filter stays LINEAR for the reflection
   // map's lookups, which fall between texels.
   setTextureFilter(GL_NEAREST);
-  glUniform1i(image_program_.uniform("u_image"), 0);
-  quad_.draw(image_program_.attribute("a_position"));
+  glUniform1i(program.uniform("u_image"), 0);
+  quad_.draw(program.attribute("a_position"));
   setTextureFilter(GL_LINEAR);
 }
 
@@ -195,6 +207,8 @@ const gles::Program* ObjectCompositor::prepareShading(ObjectShape shape, const C
                glm::value_ptr(lighting.clipped_direction_w[0]));
   glUniform3fv(program.uniform("u_clipped_diffuse_rgb"), ibl::SceneLighting::kMaxClippedLights,
                glm::value_ptr(lighting.clipped_diffuse_rgb[0]));
+  glUniform3fv(program.uniform("u_lamp_direction_w"), 1, glm::value_ptr(lighting.lamp_direction_w));
+  glUniform3fv(program.uniform("u_lamp_diffuse_rgb"), 1, glm::value_ptr(lighting.lamp_diffuse_rgb));
 
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);

@@ -60,7 +60,9 @@ class ObjectCompositor {
 
   // The camera frame, unmodified and upright, over the current viewport.
   // Clears the depth buffer (start of a frame) and leaves depth test off.
-  void drawCameraBackground(const CameraFrameTexture& camera_frame);
+  // exposure_gain: the frame darkened (< 1) as a shorter exposure would
+  // darken it, in linear light (stages/lamp_exposure.hpp); 1: its bytes.
+  void drawCameraBackground(const CameraFrameTexture& camera_frame, double exposure_gain = 1.0);
 
   // A sphere of radius_m at centre_w (W), lit by ibl::shadeSurface with the
   // environment maps, depth-tested. The current viewport must cover the whole
@@ -113,6 +115,7 @@ class ObjectCompositor {
   ObjectCompositorSettings settings_;
   CubeStorage storage_ = CubeStorage::kSrgb8;
   gles::Program image_program_;
+  gles::Program darkened_image_program_;  // the camera background at an exposure gain
   std::map<std::tuple<ObjectShape, int, int, bool, bool>, gles::Program> shading_programs_;
   const SensorNoiseMatch* sensor_noise_ = nullptr;
   glm::vec3 response_gain_rgb_{1.0f};

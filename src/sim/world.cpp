@@ -663,6 +663,8 @@ struct FrameState {
   glm::dvec3 ground_radiance_per_albedo;              // E_up / pi
   std::array<glm::dvec3, kPostAzimuthSteps> post_radiance;  // by world azimuth of the post's normal
   const OccluderFrame* occluders = nullptr;           // renderWithOccluders only
+  const World::Lamp* lamp = nullptr;                  // renderWithOccluders only
+  glm::dvec3 lamp_at_one_metre{0.0};                  // its irradiance over E_up per channel, 1 m below it
   bool occluders_only = false;                        // PixelWindow::occluders_only
 };
 
@@ -918,6 +920,47 @@ struct World::Impl {
     return radiance;
   }
 
+  // The lamp's irradiance at ground point p over the room's (E_up), per
+  // channel: zero where an occluder, the ball or its post stands between.
+  glm::dvec3 lampOverRoom(const glm::dvec3& p, const FrameState& fs) const {
+    const World::Lamp& lamp = *fs.lamp;
+    const glm::dvec3 to_lamp = lamp.position_w - p;
+    const double d = glm::length(to_lamp);
+    if (!(d > 0.0) || !(to_lamp.z > 0.0)) return glm::dvec3(0.0);
+    const glm::dvec3 dir = to_lamp / d;
+    double spot = 1.0;
+    if (lamp.spot_half_angle_deg < 180.0) {
+      const double outer = std::cos(degToRad(std::min(lamp.spot_half_angle_deg + 0.5 * lamp.spot_softness_deg, 180.0)));
+      const double inner =
+          std::max(std::cos(degToRad(std::max(lamp.spot_half_angle_deg - 0.5 * lamp.spot_softness_deg, 0.0))),
+                   outer + 1e-4);
+      const double x = std::clamp((glm::dot(-dir, glm::normalize(lamp.spot_direction_w)) - outer) / (inner - outer),
+                                  0.0, 1.0);
+      spot = x * x * (3.0 - 2.0 * x);
+    }
+    if (!(spot > 0.0)) return glm::dvec3(0.0);
+    // In the way: the ball (a sphere), its post (a vertical cylinder up to
+    // the ball), an occluder.
+    const RigGeometry& rig = scene.rig;
+    const glm::dvec3 from_ball = p - rig.probe_center_w;
+    const double b = glm::dot(from_ball, dir), c = glm::dot(from_ball, from_ball) - rig.probe_radius_m * rig.probe_radius_m;
+    if (b * b - c > 0.0 && -b - std::sqrt(b * b - c) > 0.0 && -b - std::sqrt(b * b - c) < d) return glm::dvec3(0.0);
+    if (scene.post_radius_m > 0.0) {
+      const glm::dvec2 from_axis = glm::dvec2(p) - glm::dvec2(rig.probe_center_w);
+      const glm::dvec2 across(dir);
+      const double a2 = glm::dot(across, across), b2 = glm::dot(from_axis, across);
+      const double c2 = glm::dot(from_axis, from_axis) - scene.post_radius_m * scene.post_radius_m;
+      if (a2 > 0.0 && b2 * b2 - a2 * c2 > 0.0) {
+        const double t = (-b2 - std::sqrt(b2 * b2 - a2 * c2)) / a2;
+        if (t > 0.0 && t < d && p.z + t * dir.z < rig.probe_center_w.z - rig.probe_radius_m) return glm::dvec3(0.0);
+      }
+    }
+    if (fs.occluders)
+      for (const VirtualOccluder& occluder : fs.occluders->shadow.occluders)
+        if (occluderBlocks(occluder, p + 1e-9 * dir, dir, d)) return glm::dvec3(0.0);
+    return fs.lamp_at_one_metre * (to_lamp.z / (d * d * d) * spot);
+  }
+
   // Radiance of the first hit at distance t_best along dir; `object` floor
   // becomes tag where the tag is printed.
   glm::dvec3 shadeHit(const glm::dvec3& dir, const FrameState& fs, double t_best, SceneObject& object,
@@ -929,8 +972,10 @@ struct World::Impl {
       case SceneObject::kFloor:
       case SceneObject::kTag: {
         const glm::dvec3 p = fs.eye + t_best * dir;
-        glm::dvec3 radiance = groundRadiance(p, fs, object, &white);
+        const glm::dvec3 lit = groundRadiance(p, fs, object, &white);
+        glm::dvec3 radiance = lit;
         if (fs.occluders) radiance *= shadowFraction({p.x, p.y}, *fs.occluders);
+        if (fs.lamp) radiance += lit * lampOverRoom(p, fs);
         return radiance;
       }
       case SceneObject::kOccluder: {
@@ -1941,11 +1986,17 @@ std::vector<World::GroundShadowTruth> World::groundShadow(const std::vector<glm:
 }
 
 void World::renderWithOccluders(std::uint64_t frame_index, const std::vector<VirtualOccluder>& occluders,
-                                ImageRGB8& out, FrameTruth& truth, const PixelWindow* window) const {
+                                ImageRGB8& out, FrameTruth& truth, const PixelWindow* window, const Lamp* lamp) const {
   const Impl& w = *impl_;
   FrameState fs = w.frameState(frame_index);
   const std::unique_ptr<OccluderFrame> occluder_frame = w.occluderFrame(fs, occluders);
   fs.occluders = occluder_frame.get();
+  if (lamp != nullptr && lamp->intensity > 0.0) {
+    fs.lamp = lamp;
+    const glm::dvec3 e_up = w.irradianceUp(fs.lighting);
+    const double y = 0.2126 * e_up.r + 0.7152 * e_up.g + 0.0722 * e_up.b;
+    for (int c = 0; c < 3; ++c) fs.lamp_at_one_metre[c] = e_up[c] > 0.0 ? lamp->intensity * lamp->colour[c] * y / e_up[c] : 0.0;
+  }
   fs.occluders_only = window && window->occluders_only;
   w.renderFrame(fs, frame_index, out, 0.0, window);
   truth = this->truth(frame_index);

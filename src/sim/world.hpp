@@ -150,8 +150,26 @@ class World {
     int x_begin = 0, y_begin = 0, x_end = 0, y_end = 0;  // [begin, end) in pixels
     bool occluders_only = false;
   };
+  // A lamp standing in the scene (issue 19's virtual light, rendered as if
+  // it were real): a point light, or a spot of smooth edge, lighting the
+  // ground (floor and tag) only. Its irradiance on the ground at p is
+  //   intensity x colour x Y(E_up) x cos(theta) / d^2 x spot(p)
+  // (E_up: groundIrradianceUp, Y its Rec. 709 luminance), added to the
+  // ground's light where nothing stands between p and the lamp: the
+  // occluders, the ball and its post. spot(p) is smoothstep from the cosine
+  // of (half-angle + softness / 2) to that of (half-angle - softness / 2)
+  // off its axis; a half-angle of 180 is a point light.
+  struct Lamp {
+    glm::dvec3 position_w{0.0, 0.0, 0.3};
+    glm::dvec3 colour{1.0};
+    double intensity = 0.0;
+    glm::dvec3 spot_direction_w{0.0, 0.0, -1.0};
+    double spot_half_angle_deg = 180.0;
+    double spot_softness_deg = 5.0;
+  };
   void renderWithOccluders(std::uint64_t frame_index, const std::vector<VirtualOccluder>& occluders,
-                           ImageRGB8& out, FrameTruth& truth, const PixelWindow* window = nullptr) const;
+                           ImageRGB8& out, FrameTruth& truth, const PixelWindow* window = nullptr,
+                           const Lamp* lamp = nullptr) const;
   // Below this (every channel) renderWithOccluders leaves the ground unshadowed:
   // it changes an 8-bit sRGB code by at most 0.44 * 255 * deficit = 0.02.
   static constexpr double kIgnoredShadowDeficit = 2e-4;

@@ -13,6 +13,7 @@ double objectLightBound(const SceneObject& object, const ibl::SceneLighting& lig
   // irradiance (n . l <= 1).
   glm::dvec3 clipped(0.0);
   for (const glm::vec3& rgb : lighting.clipped_diffuse_rgb) clipped += glm::max(glm::dvec3(rgb), glm::dvec3(0.0));
+  clipped += glm::max(glm::dvec3(lighting.lamp_diffuse_rgb), glm::dvec3(0.0));  // a virtual lamp, as one more
   const glm::dvec3 gain = glm::max(response_gain, glm::dvec3(0.0));
   glm::dvec3 gained(0.0);
   if (object.isModel()) {

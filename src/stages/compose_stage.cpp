@@ -1,6 +1,7 @@
 #include "stages/compose_stage.hpp"
 
 #include <algorithm>
+#include <numbers>
 
 #include <opencv2/imgproc.hpp>
 
@@ -52,6 +53,7 @@ ComposeStage::ComposeStage(const SceneObject& object, const CameraIntrinsics& ca
 }
 
 Status ComposeStage::init(const gles::Capabilities& capabilities, passes::CubeStorage storage) {
+  capabilities_ = capabilities;
   std::string error;
   passes::ObjectCompositorSettings compositor_settings;
   compositor_settings.camera_transfer = camera_transfer_;
@@ -90,7 +92,9 @@ Status ComposeStage::init(const gles::Capabilities& capabilities, passes::CubeSt
 
 Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::string& status,
                           const passes::CameraFrameTexture& frame, MapsStage& maps, ShadowsStage& shadows,
-                          const ibl::SceneLighting& lighting) {
+                          const ibl::SceneLighting& room_lighting) {
+  // The room's lights, and the virtual lamp's when it lights.
+  ibl::SceneLighting lighting = room_lighting;
   GpuStageTimer timer(report_, kStageName, finish_gpu_);
   std::string error;
   const bool object_drawn = track.found && maps.haveMaps();
@@ -105,10 +109,11 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
   // Blurred, the noise goes in after the blur (the layer's composite).
   compositor_.setSensorNoise(blurred ? nullptr : noise_);
   model_renderer_.setSensorNoise(blurred ? nullptr : noise_);
-  compositor_.drawCameraBackground(frame);
+  compositor_.drawCameraBackground(frame, exposure_gain_);
+  // The ground: the shadow, with the lamp's light around and over it; the
+  // object then covers the part of them under itself.
+  PROBELIGHT_TRY(drawGround(object_drawn, track, frame, shadows, lighting));
   if (object_drawn) {
-    // The shadow first: the object then covers the part of it under itself.
-    if (!shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error)) return Status::runtimeFailure(error);
     if (object_.isModel() && shadows.enabled())
       model_renderer_.setSelfShadow(&shadows.pass().selfShadowLights(), shadows.pass().shadowMapSizePx(),
                                     shadows.pass().packedDepth(), &shadows.pass().floorSelfShadows());
@@ -157,6 +162,87 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
   return Status::ok();
 }
 
+Status ComposeStage::drawGround(bool object_drawn, const tracking::TagTrackResult& track,
+                                const passes::CameraFrameTexture& frame, ShadowsStage& shadows,
+                                ibl::SceneLighting& lighting) {
+  std::string error;
+  std::optional<std::string> lamp_skip;
+  if (!lamp_config_.enabled) lamp_skip = "off";
+  else if (!object_drawn) lamp_skip = "no_object";
+  else if (!room_e_up_maps_ || !(ibl::luminance(*room_e_up_maps_) > 0.0)) lamp_skip = "no_room_light";
+  if (lamp_skip) {
+    report_.recordStageSkip(kLampStageName, *lamp_skip);
+    if (object_drawn && !shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error, exposure_gain_))
+      return Status::runtimeFailure(error);
+    return Status::ok();
+  }
+  GpuStageTimer timer(report_, kLampStageName, finish_gpu_);
+  const ibl::VirtualLamp& lamp = lamp_config_.lamp;
+  if (!lamp_ready_) {
+    passes::VirtualLampLightSettings settings;
+    settings.camera_transfer = camera_transfer_;
+    if (!lamp_light_.init(capabilities_, settings, camera_, error))
+      return Status::runtimeFailure("GPU set-up failed for the virtual lamp: " + error);
+    // The object's triangles, and the rig's real ball and post, which stand
+    // in the lamp's light too (the post as a square prism of its width).
+    caster_triangles_ = passes::casterTriangles(object_.shape);
+    ibl::ShadowCaster ball;
+    ball.position_w = glm::dvec2(rig_.probe_center_w);
+    ball.radius_m = rig_.probe_radius_m;
+    for (glm::vec3 v : passes::casterTriangles(ball)) {
+      v.z += static_cast<float>(rig_.probe_center_w.z - rig_.probe_radius_m);
+      caster_triangles_.push_back(v);
+    }
+    if (rig_.post_radius_m > 0.0) {
+      ibl::ShadowCaster post;
+      post.shape = ibl::ShadowCaster::Shape::kBox;
+      post.position_w = glm::dvec2(rig_.probe_center_w);
+      post.box_size_m = {2.0 * rig_.post_radius_m, 2.0 * rig_.post_radius_m,
+                         rig_.probe_center_w.z - rig_.probe_radius_m};
+      const std::vector<glm::vec3> prism = passes::casterTriangles(post);
+      caster_triangles_.insert(caster_triangles_.end(), prism.begin(), prism.end());
+    }
+    lamp_ready_ = true;
+  }
+  const glm::dvec3 ratio = ibl::lampRatioAtOneMetre(lamp, *room_e_up_maps_);
+  // The shadow's mask is made again when the room's colour moves the
+  // lamp's ratio by over 2% (a refit). The reach reported: where the lamp
+  // still moves a white pixel by half an 8-bit step (ratio 1/510).
+  const glm::dvec3 moved = glm::abs(ratio - lamp_sized_for_ratio_);
+  if (moved.r > 0.02 * ratio.r || moved.g > 0.02 * ratio.g || moved.b > 0.02 * ratio.b) {
+    if (!lamp_light_.updateShadow(lamp, caster_triangles_, error)) return Status::runtimeFailure(error);
+    lamp_sized_for_ratio_ = ratio;
+    report_.count("virtual_lamp_updates");
+    nlohmann::json& out = report_.extra["virtual_lamp"];
+    out["reach_m"] = ibl::lampPoolRadiusM(lamp, *room_e_up_maps_, 1.0 / 510.0);
+    out["casts_shadow"] = lamp_light_.castsShadow();
+    out["ratio_at_one_metre"] = {ratio.r, ratio.g, ratio.b};
+  }
+  passes::VirtualLampLight::Frame lamp_frame;
+  lamp_frame.ratio_at_one_metre_rgb = ratio;
+  lamp_frame.dome_shadow = shadows.enabled() ? &shadows.pass() : nullptr;
+  lamp_frame.exposure_gain = exposure_gain_;
+  // The lamp over the frame, the shadow's cells with the lamp's light
+  // added, then near the object and the rig everything again.
+  const passes::GroundLampTerm ground_term = lamp_light_.groundTerm(ratio);
+  if (!lamp_light_.drawSmooth(camera_, track.pose, frame, rig_, lamp_frame, error) ||
+      !shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error, exposure_gain_, &ground_term) ||
+      !lamp_light_.drawDetail(camera_, track.pose, frame, rig_, lamp_frame, error))
+    return Status::runtimeFailure(error);
+  // The object: the lamp seen from its middle (diffuse E / pi, in the
+  // maps' units).
+  const glm::dvec3 to_lamp = lamp.position_w - object_.shape.boundingCentre();
+  const double d2 = glm::dot(to_lamp, to_lamp);
+  const bool lit = d2 > 0.0;
+  if (lit) {
+    const double spot = ibl::spotWeight(lamp, object_.shape.boundingCentre());
+    lighting.lamp_diffuse_rgb = glm::vec3(ratio * *room_e_up_maps_ * (spot / (std::numbers::pi * d2)));
+    lighting.lamp_direction_w = glm::vec3(to_lamp / std::sqrt(d2));
+  }
+  report_.extra["virtual_lamp"]["lights_the_object"] = lit;
+  return Status::ok();
+}
+
 bool ComposeStage::drawObject(const tracking::TagTrackResult& track, MapsStage& maps,
                               const ibl::SceneLighting& lighting, std::string& error) {
   if (object_.isModel()) return model_renderer_.draw(camera_, track.pose, lighting, maps.maps(), error);
@@ -176,7 +262,7 @@ Status ComposeStage::drawBloom(bool object_drawn, const tracking::TagTrackResult
     report_.recordStageSkip(kBloomStageName, "no_object");
     return Status::ok();
   }
-  if (!(objectLightBound(object_, lighting, maps.reflectionPeak(), response_gain_rgb_) > 1.0)) {
+  if (!(objectLightBound(object_, lighting, maps.reflectionPeak(), response_gain_rgb_ * exposure_gain_) > 1.0)) {
     report_.recordStageSkip(kBloomStageName, "nothing_above_white");
     return Status::ok();
   }

@@ -19,7 +19,9 @@
 #include "passes/object_bloom.hpp"
 #include "passes/object_blur.hpp"
 #include "passes/object_compositor.hpp"
+#include "passes/virtual_lamp_light.hpp"
 #include "stages/maps_stage.hpp"
+#include "stages/pipeline_settings.hpp"
 #include "stages/run_report.hpp"
 #include "stages/scene_object.hpp"
 #include "stages/shadows_stage.hpp"
@@ -73,8 +75,14 @@ class ComposeStage {
   // drawn from now on.
   void setResponseGain(const glm::dvec3& gain_rgb) {
     response_gain_rgb_ = gain_rgb;
-    compositor_.setResponseGain(glm::vec3(gain_rgb));
-    model_renderer_.setResponseGain(glm::vec3(gain_rgb));
+    applyObjectGain();
+  }
+  // The whole frame darkened as a shorter exposure would darken it, in
+  // linear light (stages/lamp_exposure.hpp: the virtual lamp's light would
+  // clip); 1: shown as the camera gave it.
+  void setExposureGain(double gain) {
+    exposure_gain_ = gain;
+    applyObjectGain();
   }
   // The lens's glare around the object's light above white
   // (passes/object_bloom.hpp), spread by sigma_px; none: no bloom. The
@@ -82,17 +90,40 @@ class ComposeStage {
   // (stages/bloom_bound.hpp) and skips otherwise (nothing_above_white,
   // no_object, off).
   void setBloom(std::optional<double> sigma_px) { bloom_sigma_px_ = sigma_px; }
+  // The virtual lamp (probelight.yaml's virtual_lamp, ibl/virtual_lamp.hpp):
+  // with it enabled, the stage `virtual_lamp` lights the real ground
+  // around the object (passes/virtual_lamp_light), with the object's
+  // shadow from it, and the object itself (as one more of its lights);
+  // it skips off, no_object, no_room_light (before the first fit: the
+  // lamp's brightness is given against the room's).
+  void setVirtualLamp(const VirtualLampConfig& config) { lamp_config_ = config; }
+  // The room's light on the ground as the lights were last fitted, in the
+  // maps' units (LightsStage::roomGroundIrradiance); none before a fit.
+  void setRoomLight(std::optional<glm::dvec3> e_up_maps) { room_e_up_maps_ = e_up_maps; }
   // The display still holds what was drawn last: shown again, not drawn.
   void skip(const std::string& reason) {
     report_.recordStageSkip(kStageName, reason);
     report_.recordStageSkip(kBloomStageName, reason);
+    report_.recordStageSkip(kLampStageName, reason);
   }
   static constexpr const char* kBloomStageName = "bloom";
+  static constexpr const char* kLampStageName = "virtual_lamp";
 
  private:
   // The object (sphere, box or model) into the bound framebuffer.
   bool drawObject(const tracking::TagTrackResult& track, MapsStage& maps, const ibl::SceneLighting& lighting,
                   std::string& error);
+  // The object's gain: the response's times the exposure's.
+  void applyObjectGain() {
+    const glm::vec3 gain(response_gain_rgb_ * exposure_gain_);
+    compositor_.setResponseGain(gain);
+    model_renderer_.setResponseGain(gain);
+  }
+  // Before the object, over the background: the ground's shadow, and the
+  // lamp's light on the ground (or the lamp's skip); `lighting` gains the
+  // lamp for the object.
+  Status drawGround(bool object_drawn, const tracking::TagTrackResult& track, const passes::CameraFrameTexture& frame,
+                    ShadowsStage& shadows, ibl::SceneLighting& lighting);
   // After the object: its light above white spread around it, or a skip.
   Status drawBloom(bool object_drawn, const tracking::TagTrackResult& track, MapsStage& maps,
                    const ibl::SceneLighting& lighting);
@@ -109,7 +140,15 @@ class ComposeStage {
   std::optional<double> blur_edge_sigma_px_;
   std::optional<glm::dvec2> motion_smear_px_;
   glm::dvec3 response_gain_rgb_{1.0};
+  double exposure_gain_ = 1.0;
   std::optional<double> bloom_sigma_px_;
+  VirtualLampConfig lamp_config_;
+  std::optional<glm::dvec3> room_e_up_maps_;
+  passes::VirtualLampLight lamp_light_;  // made on the first frame the lamp lights
+  bool lamp_ready_ = false;
+  gles::Capabilities capabilities_;  // init()'s, for what is made on first use
+  std::vector<glm::vec3> caster_triangles_;  // the object's, for the lamp's shadow
+  glm::dvec3 lamp_sized_for_ratio_{-1.0};    // the ratio the pool and shadow were made for
   passes::ObjectBloom bloom_;  // made on the first frame that blooms
   passes::ObjectBlurLayer blur_layer_;      // made on the first blurred frame
   passes::SensorNoiseTexture noise_texture_;  // the blur layer's, made on first use

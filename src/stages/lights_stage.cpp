@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <iomanip>
+#include <algorithm>
 #include <numbers>
 #include <ostream>
 #include <sstream>
@@ -408,6 +409,17 @@ void LightsStage::showInMapsUnits(const MapsStage& maps) {
   shown_lighting_.highlight_rgb *= factor;
   for (glm::vec3& rgb : shown_lighting_.clipped_diffuse_rgb) rgb *= factor;
   shown_lighting_.dome_rgb_scale = factor;
+  // The room's light on the ground as fitted, in the maps' units: the
+  // diffuse map's upward irradiance and the clipped lights' (which the
+  // 8-bit map lacks), E = pi (D(+z) + sum C_k max(0, l_k . z)).
+  room_e_up_maps_.reset();
+  if (ibl::luminance(lights_fitted_e_up_) > 0.0) {
+    glm::dvec3 room = lights_fitted_e_up_ * responseRatio(e_up_response_, maps.mapsResponse());
+    for (int k = 0; k < ibl::SceneLighting::kMaxClippedLights; ++k)
+      room += std::numbers::pi * glm::dvec3(shown_lighting_.clipped_diffuse_rgb[static_cast<size_t>(k)]) *
+              std::max(0.0, static_cast<double>(shown_lighting_.clipped_direction_w[static_cast<size_t>(k)].z));
+    room_e_up_maps_ = room;
+  }
 }
 
 // lights.refit_when_light_changes: at each map update (the policy already

@@ -93,6 +93,11 @@ class LightsStage {
   // frame's exposure and white balance brought to the maps' frame's), and
   // the factor that brings the dome's irradiances there too.
   const ibl::SceneLighting& sceneLighting() const { return shown_lighting_; }
+  // The room's irradiance on the ground (facing up) as the lights were
+  // last fitted, clipped lights included, in the maps' units; none before
+  // a fit. What a virtual lamp's brightness is given against
+  // (ibl/virtual_lamp.hpp).
+  std::optional<glm::dvec3> roomGroundIrradiance() const { return room_e_up_maps_; }
   // The response of the frame the lights in use were fitted in, for the
   // maps' clip level (MapsStage::setLightsFittedAt); none before any
   // lights and while recalibrating (the fit reads the 8-bit maps as shown).
@@ -168,6 +173,7 @@ class LightsStage {
   FrameResponse fit_response_;  // the camera's response in the fit frame (0s: unknown)
   // The maps' response when lights_fitted_e_up_ was read from them.
   FrameResponse e_up_response_;
+  std::optional<glm::dvec3> room_e_up_maps_;  // roomGroundIrradiance()
   std::optional<StoredLighting> stored_lighting_;
   double frame_time_s_ = 0.0;  // of the last frame the pipeline ran on
   glm::dvec3 lights_fitted_e_up_{0.0};  // the ground's irradiance when the lights were last fitted

@@ -8,6 +8,7 @@
 
 #include <glm/glm.hpp>
 
+#include "ibl/virtual_lamp.hpp"
 #include "ibl/light_dome.hpp"
 #include "passes/environment_maps.hpp"
 #include "stages/lighting_state_machine.hpp"
@@ -170,6 +171,13 @@ struct CameraMatchConfig {
   bool motion_blur = false;
 };
 
+// A virtual lamp lighting the real ground, and the object
+// (ibl/virtual_lamp.hpp, passes/virtual_lamp_light.hpp).
+struct VirtualLampConfig {
+  bool enabled = false;
+  ibl::VirtualLamp lamp;
+};
+
 struct PipelineSettings {
   EnvironmentMapConfig maps;
   TrackingConfig tracking;
@@ -181,6 +189,7 @@ struct PipelineSettings {
   StateConfig state;
   CameraConfig camera;
   CameraMatchConfig camera_match;
+  VirtualLampConfig virtual_lamp;
   bool gpu_finish = true;  // glFinish after each GPU stage so the report times it (costs pipelining)
 };
 

@@ -163,6 +163,28 @@ TEST(AppSettings, ObjectMustRestOnTheGround) {
   }
 }
 
+// A virtual lamp on or under the ground, a zero spot direction, a spot
+// angle past a hemisphere or a negative intensity: refused, the field named.
+TEST(AppSettings, VirtualLampFieldsAreChecked) {
+  const std::string path = ::testing::TempDir() + "/lamp_probelight.yaml";
+  for (const auto& [yaml, field] : {std::pair{"virtual_lamp:\n  position: [0, 0, 0]\n", "virtual_lamp.position"},
+                                    std::pair{"virtual_lamp:\n  spot_direction: [0, 0, 0]\n", "virtual_lamp.spot_direction"},
+                                    std::pair{"virtual_lamp:\n  spot_half_angle_deg: 200\n", "virtual_lamp.spot_half_angle_deg"},
+                                    std::pair{"virtual_lamp:\n  intensity: -1\n", "virtual_lamp.intensity"},
+                                    std::pair{"virtual_lamp:\n  colour: [1, .nan, 1]\n", "virtual_lamp.colour"}}) {
+    FILE* file = std::fopen(path.c_str(), "w");
+    ASSERT_NE(file, nullptr);
+    std::fputs(yaml, file);
+    std::fclose(file);
+    try {
+      loadAppSettings(path);
+      ADD_FAILURE() << "accepted: " << yaml;
+    } catch (const config::ConfigError& error) {
+      EXPECT_NE(std::string(error.what()).find(field), std::string::npos) << error.what();
+    }
+  }
+}
+
 // A smoothing weight of 0 would keep the first map for ever: refused, with
 // the file and the field named.
 TEST(AppSettings, MapUpdateFieldsAreRangeChecked) {

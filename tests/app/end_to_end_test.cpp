@@ -27,7 +27,9 @@
 #include "config/camera_file.hpp"
 #include "stages/state_store.hpp"
 #include "config/rig_file.hpp"
+#include "ibl/color_transfer.hpp"
 #include "sim/camera_path.hpp"
+#include "sim/occluder.hpp"
 #include "sim/scene_config.hpp"
 #include "stages/scene_object.hpp"
 #include "sim/scene_geometry.hpp"
@@ -1101,6 +1103,197 @@ TEST_F(EndToEnd, MotionMatchFollowsTheSimulatedPanAndShowsAsRunsAndSkips) {
   EXPECT_EQ(report_off["stages"]["match_motion"]["runs"], 0);
   EXPECT_EQ(report_off["stages"]["match_motion"]["skip_reasons"]["off"].get<int>(),
             4 - report_off["counters"].value("frames_in_bracket", 0));
+}
+
+// virtual_lamp: a warm lamp 22 cm above the floor beside the object (a
+// point light, and a spot aimed past the object) lights the real ground,
+// and the object's shadow (and the ball's) from it falls on it. The truth is the simulator's own: the same lamp standing in its
+// scene with the object as an occluder (World::renderWithOccluders), by
+// its own ray casts (the ground's light from the sky and the lamp, the
+// lamp hidden by the sphere, the ball or the post). The measure is the
+// ground's pixels where the lamp adds at least a twentieth of their light,
+// in linear light: the composite against the truth.
+class EndToEndLamp : public EndToEnd, public ::testing::WithParamInterface<double> {};
+
+TEST_P(EndToEndLamp, LightsTheGroundAsTheSimulatorsLampDoes) {
+  const int frames = 12;
+  const glm::dvec3 lamp_w(0.09, -0.07, 0.22), colour(1.0, 0.85, 0.65);
+  const double intensity = 0.03;
+  // The spot's axis: from the lamp toward a point past the object.
+  const glm::dvec3 spot_axis = glm::normalize(glm::dvec3(-0.05, 0.08, 0.0) - lamp_w);
+  const double spot_half_angle_deg = GetParam(), spot_softness_deg = 6.0;
+  const fs::path config = dir_ / "lamp.yaml";
+  auto write = [&](bool enabled) {
+    std::ofstream(config) << "virtual_lamp:\n  enabled: " << (enabled ? "true" : "false") << "\n  position: ["
+                          << lamp_w.x << ", " << lamp_w.y << ", " << lamp_w.z << "]\n  colour: [" << colour.r << ", "
+                          << colour.g << ", " << colour.b << "]\n  intensity: " << intensity
+                          << "\n  spot_direction: [" << spot_axis.x << ", " << spot_axis.y << ", " << spot_axis.z
+                          << "]\n  spot_half_angle_deg: " << spot_half_angle_deg
+                          << "\n  spot_softness_deg: " << spot_softness_deg << "\nsim:\n  camera_path: static\n";
+  };
+  write(true);
+  const fs::path out = dir_ / "lamp";
+  const CommandResult result = run("run --source sim --display headless --frames " + std::to_string(frames) +
+                                   " --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  const nlohmann::json& stage = report["stages"]["virtual_lamp"];
+  EXPECT_EQ(stage["runs"].get<int>() + stage["skipped"].get<int>(), frames);
+  EXPECT_GT(stage["runs"].get<int>(), 0);
+  EXPECT_TRUE(report["virtual_lamp"]["casts_shadow"].get<bool>());
+  EXPECT_TRUE(report["virtual_lamp"]["lights_the_object"].get<bool>());
+  // Under white: the frame is not darkened.
+  EXPECT_DOUBLE_EQ(report["virtual_lamp"]["exposure"]["lowest_gain"].get<double>(), 1.0);
+
+  sim::SceneConfig scene = sim::defaultScene();
+  scene.environment = "studio";  // the run's default (AppSettings)
+  scene.camera_path.name = "static";
+  const sim::World world(scene);
+  sim::VirtualOccluder sphere;  // the run's default object (ObjectConfig)
+  sphere.radius_m = ObjectConfig{}.radius_m;
+  sphere.position_w = ObjectConfig{}.position_w;
+  sim::World::Lamp lamp;
+  lamp.position_w = lamp_w;
+  lamp.colour = colour;
+  lamp.intensity = intensity;
+  lamp.spot_direction_w = spot_axis;
+  lamp.spot_half_angle_deg = spot_half_angle_deg;
+  lamp.spot_softness_deg = spot_softness_deg;
+  ImageRGB8 lit, unlit;
+  FrameTruth truth;
+  world.renderWithOccluders(frames - 1, {sphere}, lit, truth, nullptr, &lamp);
+  world.renderWithOccluders(frames - 1, {sphere}, unlit, truth);
+  const cv::Mat composite_bgr = cv::imread((out / ("frame_0000" + std::to_string(frames - 1) + ".png")).string());
+  ASSERT_FALSE(composite_bgr.empty());
+  // The ground's pixels (floor and tag only, whole), not the object's nor
+  // near its outline, nor the status bar's rows.
+  const std::vector<float> floor = world.coverage(frames - 1, sim::SceneObject::kFloor);
+  const std::vector<float> tag = world.coverage(frames - 1, sim::SceneObject::kTag);
+  const glm::dvec2 object_px =
+      sim::projectWorldPoints(scene.camera, truth.pose, {glm::dvec3(sphere.position_w, sphere.radius_m)})[0];
+  const double object_radius_px =
+      scene.camera.fx_px * sphere.radius_m /
+      glm::length(truth.pose.cameraCenterWorld() - glm::dvec3(sphere.position_w, sphere.radius_m));
+  auto linear = [](double code) { return ibl::srgbToLinear(code / 255.0); };
+  // Two sets: the pool (where the lamp adds 5% or more, unclipped) away
+  // from the object; and all the ground around the object (out to 4 of its
+  // radii, from 4 px past its outline), its shadow from the lamp included.
+  std::vector<double> pool_errors, near_errors, lamp_shares;
+  int hidden_near = 0;
+  for (int y = 0; y < scene.camera.height_px - 40; ++y)
+    for (int x = 0; x < scene.camera.width_px; ++x) {
+      const size_t i = static_cast<size_t>(y) * scene.camera.width_px + x;
+      if (floor[i] + tag[i] < 0.999) continue;
+      const double from_object_px = glm::length(glm::dvec2(x, y) - object_px);
+      if (from_object_px < object_radius_px + 4.0) continue;
+      const double truth_lit = linear(lit.row(y)[3 * x + 1]), truth_unlit = linear(unlit.row(y)[3 * x + 1]);
+      if (truth_lit >= 0.98) continue;  // clipped in the truth
+      const double error = std::abs(linear(composite_bgr.at<cv::Vec3b>(y, x)[1]) - truth_lit) / truth_lit;
+      const double share = (truth_lit - truth_unlit) / truth_lit;
+      if (from_object_px < 4.0 * object_radius_px) {
+        near_errors.push_back(error);
+        hidden_near += share < 0.01;
+      } else if (share >= 0.05) {
+        pool_errors.push_back(error);
+        lamp_shares.push_back(share);
+      }
+    }
+  ASSERT_GT(pool_errors.size(), 2000u);
+  ASSERT_GT(near_errors.size(), 1000u);
+  ASSERT_GT(hidden_near, 100) << "the object's shadow from the lamp must fall near it";
+  auto quantile = [](std::vector<double> values, double q) {
+    std::sort(values.begin(), values.end());
+    return values[static_cast<size_t>(q * (values.size() - 1))];
+  };
+  std::printf("virtual lamp (spot half-angle %.0f): pool %zu px (lamp's share median %.2f, largest %.2f): median %.2f%%, p95 %.2f%%; "
+              "around the object %zu px (%d in its shadow from the lamp): median %.2f%%, p95 %.2f%%\n",
+              spot_half_angle_deg, pool_errors.size(), quantile(lamp_shares, 0.5), quantile(lamp_shares, 1.0),
+              100.0 * quantile(pool_errors, 0.5), 100.0 * quantile(pool_errors, 0.95), near_errors.size(), hidden_near,
+              100.0 * quantile(near_errors, 0.5), 100.0 * quantile(near_errors, 0.95));
+  EXPECT_LT(quantile(pool_errors, 0.5), 0.05);
+  EXPECT_LT(quantile(near_errors, 0.5), 0.05);
+
+  // Off: every frame skips, and the ground is the camera's.
+  write(false);
+  const fs::path out_off = dir_ / "lamp_off";
+  const CommandResult off = run("run --source sim --display headless --frames 4 --config " + config.string() +
+                                " --out " + out_off.string());
+  ASSERT_EQ(off.exit_status, 0) << off.stderr_text;
+  const nlohmann::json report_off = readReport(out_off);
+  EXPECT_EQ(report_off["stages"]["virtual_lamp"]["runs"], 0);
+  EXPECT_EQ(report_off["stages"]["virtual_lamp"]["skip_reasons"]["off"].get<int>(),
+            4 - report_off["counters"].value("frames_in_bracket", 0));
+}
+
+// 180: a point light; 30: a spot of 30 degrees about its axis.
+INSTANTIATE_TEST_SUITE_P(PointAndSpot, EndToEndLamp, ::testing::Values(180.0, 30.0));
+
+// A lamp bright enough to take the floor under it past white: the frame
+// is darkened as a shorter exposure would darken it (seed D), ramping
+// toward the gain that brings the lit frame's brightest region back to
+// 90% of white. Far from the lamp, the composite is the camera's frame
+// times that gain, in linear light.
+TEST_F(EndToEnd, ABrightVirtualLampDarkensTheFrameAsAShorterExposureWould) {
+  const int frames = 24;
+  const fs::path config = dir_ / "bright_lamp.yaml";
+  std::ofstream(config) << "virtual_lamp:\n  enabled: true\n  position: [0.09, -0.07, 0.15]\n  intensity: 0.3\n"
+                        << "lights:\n  shadows: false\nsim:\n  camera_path: static\n";
+  const fs::path out = dir_ / "bright_lamp";
+  const CommandResult result = run("run --source sim --display headless --frames " + std::to_string(frames) +
+                                   " --config " + config.string() + " --out " + out.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  const nlohmann::json report = readReport(out);
+  const nlohmann::json& stage = report["stages"]["lamp_exposure"];
+  EXPECT_EQ(stage["runs"].get<int>() + stage["skipped"].get<int>(), frames);
+  const nlohmann::json& exposure = report["virtual_lamp"]["exposure"];
+  const double target = exposure["target"].get<double>(), gain = exposure["gain"].get<double>();
+  std::printf("bright lamp: brightest region %.2f (room %.2f), target gain %.3f, gain after %d runs %.3f\n",
+              exposure["brightest_region_mean"]["lit"].get<double>(),
+              exposure["brightest_region_mean"]["room"].get<double>(), target, stage["runs"].get<int>(), gain);
+  EXPECT_LT(target, 0.8);
+  EXPECT_NEAR(exposure["brightest_region_mean"]["lit"].get<double>() * target, 0.9, 1e-6);
+  // Ramping from 1 (the frame's noise moves the target by a little):
+  // past a third of its stops after the run's lit frames (over half a
+  // time constant), never far past the target.
+  const int lit_runs = stage["runs"].get<int>();
+  EXPECT_LT(gain, 1.0);
+  EXPECT_GT(gain, 0.98 * target);
+  const double expected_stops = std::log2(target) * (1.0 - std::exp(-(lit_runs - 1) / 30.0 / 0.5));
+  EXPECT_NEAR(std::log2(gain), expected_stops, 0.1 * std::abs(expected_stops));
+  EXPECT_NEAR(exposure["lowest_gain"].get<double>(), gain, 0.02 * gain);
+
+  // The ground away from the object, where the simulator's own lamp does
+  // not take it past white: the truth lit by the lamp, times the gain.
+  sim::SceneConfig scene = sim::defaultScene();
+  scene.environment = "studio";
+  scene.camera_path.name = "static";
+  const sim::World world(scene);
+  sim::VirtualOccluder sphere;
+  sphere.radius_m = ObjectConfig{}.radius_m;
+  sim::World::Lamp lamp;
+  lamp.position_w = {0.09, -0.07, 0.15};
+  lamp.colour = ibl::VirtualLamp{}.colour;
+  lamp.intensity = 0.3;
+  ImageRGB8 lit;
+  FrameTruth truth;
+  world.renderWithOccluders(frames - 1, {sphere}, lit, truth, nullptr, &lamp);
+  const std::vector<float> floor = world.coverage(frames - 1, sim::SceneObject::kFloor);
+  const cv::Mat composite_bgr = cv::imread((out / ("frame_0000" + std::to_string(frames - 1) + ".png")).string());
+  ASSERT_FALSE(composite_bgr.empty());
+  const glm::dvec2 object_px = sim::projectWorldPoints(scene.camera, truth.pose, {glm::dvec3(0.0, 0.0, 0.035)})[0];
+  std::vector<double> ratios;
+  for (int y = 0; y < lit.height - 40; ++y)
+    for (int x = 0; x < lit.width; ++x) {
+      if (floor[static_cast<size_t>(y) * lit.width + x] < 0.999 || glm::length(glm::dvec2(x, y) - object_px) < 60.0)
+        continue;
+      const double truth_linear = ibl::srgbToLinear(lit.row(y)[3 * x + 1] / 255.0);
+      if (truth_linear < 0.05 || truth_linear > 0.95) continue;  // rounding over a percent; clipped
+      ratios.push_back(ibl::srgbToLinear(composite_bgr.at<cv::Vec3b>(y, x)[1] / 255.0) / truth_linear);
+    }
+  ASSERT_GT(ratios.size(), 10000u);
+  std::sort(ratios.begin(), ratios.end());
+  std::printf("bright lamp: composite / (gain x truth) median %.4f\n", ratios[ratios.size() / 2] / gain);
+  EXPECT_NEAR(ratios[ratios.size() / 2] / gain, 1.0, 0.03);
 }
 
 // The camera's own response: the simulated camera's auto exposure drops by
