@@ -55,8 +55,10 @@ LampExposureStage::LampExposureStage(bool enabled, const ibl::VirtualLamp& lamp,
 void LampExposureStage::run(bool object_shown, const PoseCamFromWorld& pose, const FrameBuffer& frame,
                             const std::optional<glm::dvec3>& room_e_up, double time_s) {
   if (!enabled_) return skip("off");
-  if (!object_shown) return skip("no_object");
-  if (!room_e_up || !(ibl::luminance(*room_e_up) > 0.0)) return skip("no_room_light");
+  // Without the lamp drawn (no tag, no fit yet), the frame's own exposure
+  // comes back, ramping as it went.
+  if (!object_shown) return skipAndRecover("no_object", time_s);
+  if (!room_e_up || !(ibl::luminance(*room_e_up) > 0.0)) return skipAndRecover("no_room_light", time_s);
   const auto start = std::chrono::steady_clock::now();
   cv::Mat room(blocks_y_, blocks_x_, CV_64F), lit(blocks_y_, blocks_x_, CV_64F);
   const glm::dmat3 world_from_cam = glm::transpose(pose.R_cam_from_world);
@@ -96,6 +98,12 @@ void LampExposureStage::run(bool object_shown, const PoseCamFromWorld& pose, con
   out["target"] = target;
   out["lowest_gain"] = lowest_gain_;
   out["brightest_region_mean"] = {{"room", room_brightest}, {"lit", lit_brightest}};
+}
+
+void LampExposureStage::skipAndRecover(const std::string& reason, double time_s) {
+  if (last_time_s_) ramp_.moveToward(1.0, time_s - *last_time_s_);
+  last_time_s_ = time_s;
+  skip(reason);
 }
 
 }  // namespace probelight

@@ -55,7 +55,8 @@ class ExposureRamp {
 // frame's linear luminance in blocks (block_px square, 4 samples a block),
 // with and without the lamp's light on the ground (ibl::lampToRoomRatio,
 // unshadowed: the shadow only darkens), its brightest regions, and the
-// ramp toward the gain. Skips: off (no lamp), no_object, no_room_light.
+// ramp toward the gain. Skips: off (no lamp), no_object, no_room_light;
+// while the lamp is not drawn the gain ramps back to 1.
 class LampExposureStage {
  public:
   static constexpr const char* kStageName = "lamp_exposure";
@@ -77,6 +78,8 @@ class LampExposureStage {
   double gain() const { return ramp_.gain(); }
 
  private:
+  void skipAndRecover(const std::string& reason, double time_s);
+
   bool enabled_;
   ibl::VirtualLamp lamp_;
   CameraIntrinsics camera_;

@@ -66,3 +66,49 @@ TEST(LampExposure, TheRampMovesInStopsWithItsTimeConstant) {
 
 }  // namespace
 }  // namespace probelight
+
+namespace probelight {
+namespace {
+
+// The stage on a white floor seen straight down from 0.4 m with a lamp
+// 5 cm above it: the lamp would take the floor past white, so the gain
+// ramps down; with the lamp no longer drawn (no tag) it ramps back to 1.
+TEST(LampExposureStage, DarkensWhileTheLampWouldClipAndRecoversWithoutIt) {
+  CameraIntrinsics camera;
+  camera.width_px = 160;
+  camera.height_px = 120;
+  camera.fx_px = camera.fy_px = 150.0;
+  camera.cx_px = 79.5;
+  camera.cy_px = 59.5;
+  PoseCamFromWorld pose;  // looking down: x_cam = x_w, y_cam = -y_w, z_cam = 0.4 - z_w
+  pose.R_cam_from_world = glm::dmat3(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0);
+  pose.t_cam_from_world = {0.0, 0.0, 0.4};
+  FrameBuffer frame;
+  frame.rgb.resize(camera.width_px, camera.height_px);
+  std::fill(frame.rgb.pixels.begin(), frame.rgb.pixels.end(), std::uint8_t{200});  // 0.58 linear
+  frame.finishRgb();
+  ibl::VirtualLamp lamp;
+  lamp.position_w = {0.0, 0.0, 0.05};
+  lamp.colour = glm::dvec3(1.0);
+  lamp.intensity = 0.01;  // 4x the room's light straight below
+  RunReport report;
+  LampExposureStage stage(true, lamp, camera, ibl::CameraTransfer{}, report);
+  const std::optional<glm::dvec3> room = glm::dvec3(1.0);
+  double time_s = 0.0;
+  stage.run(true, pose, frame, room, time_s);
+  EXPECT_DOUBLE_EQ(stage.gain(), 1.0);  // the first lit frame is shown as it was: the ramp starts
+  for (int i = 0; i < 60; ++i) stage.run(true, pose, frame, room, time_s += 1.0 / 30.0);
+  const double darkened = stage.gain();
+  const double target = report.extra["virtual_lamp"]["exposure"]["target"].get<double>();
+  EXPECT_LT(target, 0.5);
+  // Two seconds, four time constants: within 2% of the target's stops.
+  EXPECT_NEAR(std::log2(darkened), std::log2(target), 0.02 * std::abs(std::log2(target)));
+  for (int i = 0; i < 60; ++i) stage.run(false, pose, frame, room, time_s += 1.0 / 30.0);
+  EXPECT_NEAR(std::log2(stage.gain()), 0.0, 0.02 * std::abs(std::log2(target)));
+  const nlohmann::json json = report.toJson(121, 4.0);
+  EXPECT_EQ(json["stages"]["lamp_exposure"]["runs"], 61);
+  EXPECT_EQ(json["stages"]["lamp_exposure"]["skip_reasons"]["no_object"], 60);
+}
+
+}  // namespace
+}  // namespace probelight
