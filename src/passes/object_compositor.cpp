@@ -136,9 +136,13 @@ const gles::Program* ObjectCompositor::shadingProgram(ObjectShape shape, const R
   return &shading_programs_.emplace(key, std::move(*program)).first->second;
 }
 
-void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_frame, double exposure_gain) {
+void ObjectCompositor::clearDepth() {
   glDepthMask(GL_TRUE);
   glClear(GL_DEPTH_BUFFER_BIT);
+}
+
+void ObjectCompositor::drawCameraBackground(const CameraFrameTexture& camera_frame, double exposure_gain) {
+  clearDepth();
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
   // The bytes as they are, or through linear light when darkened.

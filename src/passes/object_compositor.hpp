@@ -63,6 +63,9 @@ class ObjectCompositor {
   // exposure_gain: the frame darkened (< 1) as a shorter exposure would
   // darken it, in linear light (stages/lamp_exposure.hpp); 1: its bytes.
   void drawCameraBackground(const CameraFrameTexture& camera_frame, double exposure_gain = 1.0);
+  // What drawCameraBackground does besides the image: for a pass that
+  // draws the whole frame itself (passes/virtual_lamp_light).
+  void clearDepth();
 
   // A sphere of radius_m at centre_w (W), lit by ibl::shadeSurface with the
   // environment maps, depth-tested. The current viewport must cover the whole

@@ -33,7 +33,7 @@ namespace probelight::passes {
 
 struct VirtualLampLightSettings {
   int shadow_mask_size_px = 512;  // over the square the object's shadow from the lamp fills
-  int grid_columns = 32;          // the frame's grid of rays (rows in proportion)
+  int grid_columns = 16;          // the frame's grid of rays (rows in proportion)
   ibl::CameraTransfer camera_transfer;
 };
 

@@ -109,7 +109,6 @@ Status ComposeStage::draw(const tracking::TagTrackResult& track, const std::stri
   // Blurred, the noise goes in after the blur (the layer's composite).
   compositor_.setSensorNoise(blurred ? nullptr : noise_);
   model_renderer_.setSensorNoise(blurred ? nullptr : noise_);
-  compositor_.drawCameraBackground(frame, exposure_gain_);
   // The ground: the shadow, with the lamp's light around and over it; the
   // object then covers the part of them under itself.
   PROBELIGHT_TRY(drawGround(object_drawn, track, frame, shadows, lighting));
@@ -172,6 +171,7 @@ Status ComposeStage::drawGround(bool object_drawn, const tracking::TagTrackResul
   else if (!room_e_up_maps_ || !(ibl::luminance(*room_e_up_maps_) > 0.0)) lamp_skip = "no_room_light";
   if (lamp_skip) {
     report_.recordStageSkip(kLampStageName, *lamp_skip);
+    compositor_.drawCameraBackground(frame, exposure_gain_);
     if (object_drawn && !shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error, exposure_gain_))
       return Status::runtimeFailure(error);
     return Status::ok();
@@ -222,8 +222,10 @@ Status ComposeStage::drawGround(bool object_drawn, const tracking::TagTrackResul
   lamp_frame.ratio_at_one_metre_rgb = ratio;
   lamp_frame.dome_shadow = shadows.enabled() ? &shadows.pass() : nullptr;
   lamp_frame.exposure_gain = exposure_gain_;
-  // The lamp over the frame, the shadow's cells with the lamp's light
-  // added, then near the object and the rig everything again.
+  // The lamp over the frame (the background's draw: the depth alone is
+  // cleared), the shadow's cells with the lamp's light added, then near
+  // the object and the rig everything again.
+  compositor_.clearDepth();
   const passes::GroundLampTerm ground_term = lamp_light_.groundTerm(ratio);
   if (!lamp_light_.drawSmooth(camera_, track.pose, frame, rig_, lamp_frame, error) ||
       !shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error, exposure_gain_, &ground_term) ||

@@ -119,9 +119,9 @@ class ComposeStage {
     compositor_.setResponseGain(gain);
     model_renderer_.setResponseGain(gain);
   }
-  // Before the object, over the background: the ground's shadow, and the
-  // lamp's light on the ground (or the lamp's skip); `lighting` gains the
-  // lamp for the object.
+  // Before the object: the camera's image with the ground's shadow, and
+  // the lamp's light on the ground (or the lamp's skip); `lighting` gains
+  // the lamp for the object.
   Status drawGround(bool object_drawn, const tracking::TagTrackResult& track, const passes::CameraFrameTexture& frame,
                     ShadowsStage& shadows, ibl::SceneLighting& lighting);
   // After the object: its light above white spread around it, or a skip.

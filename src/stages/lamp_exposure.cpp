@@ -86,10 +86,13 @@ void LampExposureStage::run(bool object_shown, const PoseCamFromWorld& pose, con
   const int window = std::max(1, blocks_x_ / 8);
   const double room_brightest = brightestWindowMean(room, window), lit_brightest = brightestWindowMean(lit, window);
   const double target = lampExposureTarget(room_brightest, lit_brightest, kWhiteRegionMean);
-  // From the frame before (the first frame the lamp lights is shown at
-  // the gain so far: the darkening ramps in as auto exposure would).
-  if (last_time_s_) ramp_.moveToward(target, time_s - *last_time_s_);
+  // From the frame before: toward the target while the lamp was lit then,
+  // toward 1 while it was not (the first frame it lights is shown at the
+  // gain so far, and the darkening ramps in from there, as auto exposure
+  // would).
+  if (last_time_s_) ramp_.moveToward(lit_before_ ? target : 1.0, time_s - *last_time_s_);
   last_time_s_ = time_s;
+  lit_before_ = true;
   lowest_gain_ = std::min(lowest_gain_, ramp_.gain());
   report_.recordStageMs(kStageName,
                         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
@@ -101,8 +104,9 @@ void LampExposureStage::run(bool object_shown, const PoseCamFromWorld& pose, con
 }
 
 void LampExposureStage::skipAndRecover(const std::string& reason, double time_s) {
-  if (last_time_s_) ramp_.moveToward(1.0, time_s - *last_time_s_);
+  if (last_time_s_) ramp_.moveToward(lit_before_ ? ramp_.gain() : 1.0, time_s - *last_time_s_);
   last_time_s_ = time_s;
+  lit_before_ = false;
   skip(reason);
 }
 

@@ -89,6 +89,7 @@ class LampExposureStage {
   std::vector<glm::dvec3> block_rays_cam_;  // through each block's centre, undistorted
   ExposureRamp ramp_{kRampTimeConstantS};
   std::optional<double> last_time_s_;
+  bool lit_before_ = false;  // the lamp lit the frame before
   double lowest_gain_ = 1.0;
 };
 
