@@ -8,7 +8,9 @@
 #   the frame's noise and blur measured and given to the object, and the
 #   lens's glare round its light above white, issue 19),
 #   and without the object following the camera's exposure and white
-#   balance (camera_match.response, on by default);
+#   balance (camera_match.response, on by default), and with everything of
+#   issue 19 on (those, motion_blur, and the virtual lamp with its
+#   exposure; the replayed camera is still, so motion blur skips);
 # each on 640x480 frames the simulator rendered once and that are replayed
 # from raw PPM files (--source images: no simulator runs, no PNG is decoded
 # or written, as with a camera), and 4. the demo as the user sees it
@@ -44,8 +46,9 @@ printf '%%YAML:1.0\n---\nmap_updates:\n  max_age_frames: 1\n' >"$work/maps.yaml"
 printf '%%YAML:1.0\n---\nmap_updates:\n  max_age_frames: 1\nlights:\n  shadow_updates: every_frame\n' >"$work/maps_shadows.yaml"
 printf '%%YAML:1.0\n---\ncamera_match:\n  noise: true\n  blur: true\n  bloom: true\n' >"$work/camera_match.yaml"
 printf '%%YAML:1.0\n---\ncamera_match:\n  response: false\n' >"$work/no_response.yaml"
+printf '%%YAML:1.0\n---\ncamera_match:\n  noise: true\n  blur: true\n  bloom: true\n  motion_blur: true\nvirtual_lamp:\n  enabled: true\n' >"$work/everything.yaml"
 
-configs=(defaults camera_match no_response maps maps_shadows demo)
+configs=(defaults camera_match everything no_response maps maps_shadows demo)
 for ((round = 1; round <= rounds; ++round)); do
   for config in "${configs[@]}"; do
     out="$work/run_${config}_$round"
@@ -66,9 +69,10 @@ work, rounds, csv_path, configs = sys.argv[1], int(sys.argv[2]), sys.argv[3], sy
 labels = {"defaults": "defaults, still camera (replayed)", "maps": "maps every frame (replayed)",
           "camera_match": "defaults + camera_match noise, blur and bloom (replayed)",
           "no_response": "defaults without camera_match.response (replayed)",
+          "everything": "defaults + every camera_match effect and the virtual lamp (replayed)",
           "maps_shadows": "maps and shadows every frame (replayed)", "demo": "demo: simulator + a PNG per frame"}
 stages = ["upload", "detect_pose", "probe_to_cube", "diffuse_blur", "clipped_rescale", "shadows", "match_response",
-          "match_noise", "match_blur", "bloom", "render", "present"]
+          "match_noise", "match_blur", "match_motion", "lamp_exposure", "virtual_lamp", "bloom", "render", "present"]
 rows = []
 print("| run | fps (median of %d rounds; all) | " % rounds + " | ".join(stages) + " |")
 print("|---|---|" + "---|" * len(stages))
