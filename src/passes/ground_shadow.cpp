@@ -477,17 +477,11 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   const std::vector<bool> cells = darkeningCells(*fraction, ground_size, segments);
   std::vector<GLushort> indices;
   const auto at = [&](int a, int b) { return static_cast<GLushort>(b * (segments + 1) + a); };
-  glm::ivec2 first_cell(segments), last_cell(-1);
   for (int j = 0; j < segments; ++j)
     for (int i = 0; i < segments; ++i)
-      if (cells[static_cast<std::size_t>(j) * segments + i]) {
+      if (cells[static_cast<std::size_t>(j) * segments + i])
         indices.insert(indices.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-        first_cell = glm::min(first_cell, glm::ivec2(i, j));
-        last_cell = glm::max(last_cell, glm::ivec2(i, j));
-      }
   region_index_count_ = static_cast<GLsizei>(indices.size());
-  darkened_low_w_ = region_.centre_w + region_.half_size_m * (2.0 * glm::dvec2(first_cell) / static_cast<double>(segments) - 1.0);
-  darkened_high_w_ = region_.centre_w + region_.half_size_m * (2.0 * glm::dvec2(last_cell + 1) / static_cast<double>(segments) - 1.0);
   if (indices.empty()) return true;  // nothing darkens the ground by a step: nothing to draw
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, region_indices_.id());
   glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLushort)), indices.data(),

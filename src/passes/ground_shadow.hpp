@@ -20,7 +20,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -108,10 +107,6 @@ class GroundShadow {
   const std::vector<SelfShadowLight>& floorSelfShadows() const { return floor_self_shadows_; }
   int shadowMapSizePx() const { return settings_.shadow_map_size_px; }
   const ibl::GroundRegion& region() const { return region_; }
-  // The ground rectangle (W metres, low and high corners) of the cells the
-  // composite draws: where the shadow darkens by a step. Meaningful while
-  // hasShadow().
-  std::pair<glm::dvec2, glm::dvec2> darkenedBoundsW() const { return {darkened_low_w_, darkened_high_w_}; }
   // The fraction texture (RGBA8, LINEAR, over region()), for a model's
   // reflection of the floor beside it (ModelRenderer::setNearFloor); only
   // meaningful while hasShadow().
@@ -159,7 +154,6 @@ class GroundShadow {
   gles::Buffer region_indices_;
   GLsizei region_index_count_ = 0;
   ibl::GroundRegion region_;
-  glm::dvec2 darkened_low_w_{0.0}, darkened_high_w_{0.0};
   bool has_shadow_ = false;
   int shadow_passes_last_update_ = 0;
 };

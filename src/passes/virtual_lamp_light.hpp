@@ -84,7 +84,6 @@ class VirtualLampLight {
   // The lamp's light as the ground shadow's composite adds it.
   GroundLampTerm groundTerm(const glm::dvec3& ratio_at_one_metre_rgb) const;
 
-  const ibl::VirtualLamp& lamp() const { return lamp_; }
 
  private:
   bool drawPass(bool detail, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
