@@ -50,12 +50,14 @@
 #include "ibl/light_dome.hpp"
 #include "ibl/spherical_blur.hpp"
 #include "ibl/surface_shading.hpp"
+#include "ibl/virtual_lamp.hpp"
 #include "passes/camera_frame_texture.hpp"
 #include "passes/environment_maps.hpp"
 #include "passes/ground_shadow.hpp"
 #include "passes/object_bloom.hpp"
 #include "passes/object_blur.hpp"
 #include "passes/object_compositor.hpp"
+#include "passes/virtual_lamp_light.hpp"
 #include "sim/occluder.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
@@ -765,6 +767,49 @@ void shadowComposite(benchmark::State& state) {
   target.bind();
   for (auto _ : state) {
     if (!shadow.drawOnCameraImage(s.scene.camera, s.frames[0].truth.pose, *rig.frames.textures[0], error)) {
+      state.SkipWithError(error.c_str());
+      break;
+    }
+    glFinish();
+  }
+}
+
+// The virtual lamp over the frame once its shadow mask is made (the
+// compose stage with virtual_lamp enabled, at its defaults: a point light
+// 25 cm up beside the object): the whole-frame pass with the dome's
+// shadow, and the detail pass about the object's shadow and the rig; these
+// stand in for render's background and shadow_composite. With
+// `smooth_only`, the whole-frame pass alone.
+void virtualLampComposite(benchmark::State& state, bool smooth_only) {
+  if (!requireGl(state)) return;
+  Setup& s = setup();
+  ShadowRig rig;
+  passes::GroundShadow shadow;
+  passes::VirtualLampLight lamp_light;
+  gles::RenderTarget target;
+  std::string error;
+  const ibl::VirtualLamp lamp;
+  const ibl::ShadowCaster caster = benchCaster();
+  std::vector<glm::vec3> caster_triangles = passes::casterTriangles(caster);
+  if (!rig.init(error) || !shadow.init(s.capabilities_full, {}, error) ||
+      !shadow.update(ibl::groundShadowLights(ibl::fitLightDome(*rig.reflection, &rig.validity)), caster, error) ||
+      !lamp_light.init(s.capabilities_full, passes::VirtualLampLightSettings{}, s.scene.camera, error) ||
+      !lamp_light.updateShadow(lamp, caster_triangles, error) ||
+      !target.init(s.scene.camera.width_px, s.scene.camera.height_px, error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  passes::VirtualLampLight::Frame frame;
+  frame.ratio_at_one_metre_rgb = ibl::lampRatioAtOneMetre(lamp, glm::dvec3(0.8, 0.75, 0.7));
+  frame.dome_shadow = &shadow;
+  const PoseCamFromWorld& pose = s.frames[0].truth.pose;
+  const passes::CameraFrameTexture& camera_frame = *rig.frames.textures[0];
+  target.bind();
+  for (auto _ : state) {
+    const bool drawn =
+        lamp_light.drawSmooth(s.scene.camera, pose, camera_frame, s.scene.rig, frame, error) &&
+        (smooth_only || lamp_light.drawDetail(s.scene.camera, pose, camera_frame, s.scene.rig, frame, error));
+    if (!drawn) {
       state.SkipWithError(error.c_str());
       break;
     }
@@ -1505,6 +1550,15 @@ void registerAll() {
         ->UseRealTime()
         ->MinTime(kMinTime);
   benchmark::RegisterBenchmark("shadow_composite/640x480", shadowComposite)->Unit(kMillisecond)->UseRealTime()->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("virtual_lamp/640x480", [](benchmark::State& state) { virtualLampComposite(state, false); })
+      ->Unit(kMillisecond)
+      ->UseRealTime()
+      ->MinTime(kMinTime);
+  benchmark::RegisterBenchmark("virtual_lamp/640x480/whole_frame_pass",
+                               [](benchmark::State& state) { virtualLampComposite(state, true); })
+      ->Unit(kMillisecond)
+      ->UseRealTime()
+      ->MinTime(kMinTime);
   benchmark::RegisterBenchmark("render/640x480", [](benchmark::State& state) { renderFrame(state, false); })
       ->Unit(kMillisecond)
       ->UseRealTime()

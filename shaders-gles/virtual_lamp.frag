@@ -3,8 +3,9 @@
 // ibl/virtual_lamp.hpp): over the whole frame (virtual_lamp.vert gives each
 // pixel its camera ray in W, and the ground point is where it meets z = 0),
 // the camera pixel decoded to linear light times the exposure gain and
-// (s + ratio), encoded again. s is the dome's shadow fraction where its
-// square reaches (1 elsewhere), ratio the lamp's irradiance over the
+// (s + ratio), encoded again (in the whole-frame draw without decoding
+// it). s is the dome's shadow fraction where its square reaches (1
+// elsewhere), ratio the lamp's irradiance over the
 // room's (0 above the horizon):
 // ratio_1m cos(theta) / d^2, the spot's smoothstep of the cosine off its
 // axis, and the object's shadow from the lamp (u_lamp_shadow over its own
@@ -89,9 +90,16 @@ void main() {
   // Above the horizon: no ground, no lamp.
   vec3 ratio = v_ray_w.z < 0.0 ? lampRatio(ground) : vec3(0.0);
 #ifndef LAMP_DETAIL
-  // Over the frame: the camera's values scaled by gain x (1 + ratio)
-  // without decoding them (camera_transfer.glsl).
-  vec3 scale = u_exposure_gain * (1.0 + ratio);
+  // Over the frame: the camera's values scaled by gain x (s + ratio)
+  // without decoding them (camera_transfer.glsl). s is read everywhere and
+  // chosen by a step, not a branch: llvmpipe would pay for both sides. The
+  // fraction texture is exactly 1 (255) wherever the dome's shadow darkens
+  // by under half a step, so this is the shadow's own composite, folded in.
+  PLACE vec2 dome_uv = squareUv(ground.xy, u_dome_centre_w, max(u_dome_half_size_m, 1e-3));
+  PLACE vec2 dome_inside = step(vec2(0.0), dome_uv) * step(dome_uv, vec2(1.0));
+  float in_dome = dome_inside.x * dome_inside.y * step(1e-6, u_dome_half_size_m) * step(v_ray_w.z, 0.0);
+  vec3 light = mix(vec3(1.0), texture2D(u_dome_shadow, dome_uv).rgb, in_dome);
+  vec3 scale = u_exposure_gain * (light + ratio);
   gl_FragColor = vec4(scaleEncodedCamera(encoded, scale, pow(scale, vec3(u_transfer_root))), 1.0);
 #else
   // Near the object and the rig (this variant's draw is cut to their

@@ -491,24 +491,11 @@ bool GroundShadow::update(const std::vector<ibl::ShadowLight>& lights, const ibl
   return gles::checkGl("ground shadow cells", error);
 }
 
-void setGroundLampUniforms(const gles::Program& program, const GroundLampTerm& lamp) {
-  glUniform3fv(program.uniform("u_lamp_w"), 1, glm::value_ptr(lamp.position_w));
-  glUniform3fv(program.uniform("u_lamp_ratio_at_one_metre"), 1, glm::value_ptr(lamp.ratio_at_one_metre));
-  glUniform3fv(program.uniform("u_spot_direction_w"), 1, glm::value_ptr(lamp.spot_direction_w));
-  glUniform2fv(program.uniform("u_spot_cosines"), 1, glm::value_ptr(lamp.spot_cosines));
-  glUniform1f(program.uniform("u_spot"), lamp.spot ? 1.0f : 0.0f);
-}
-
 bool GroundShadow::drawOnCameraImage(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
-                                     const CameraFrameTexture& camera_frame, std::string& error, double exposure_gain,
-                                     const GroundLampTerm* lamp) {
+                                     const CameraFrameTexture& camera_frame, std::string& error, double exposure_gain) {
   if (!has_shadow_) return true;
   composite_program_.use();
   glUniform1f(composite_program_.uniform("u_exposure_gain"), static_cast<float>(exposure_gain));
-  setGroundLampUniforms(composite_program_, lamp != nullptr ? *lamp : GroundLampTerm{});
-  glUniform2f(composite_program_.uniform("u_ground_centre_w"), static_cast<float>(region_.centre_w.x),
-              static_cast<float>(region_.centre_w.y));
-  glUniform1f(composite_program_.uniform("u_ground_half_size_m"), static_cast<float>(region_.half_size_m));
   glUniform2f(composite_program_.uniform("u_region_centre_w"), static_cast<float>(region_.centre_w.x),
               static_cast<float>(region_.centre_w.y));
   glUniform1f(composite_program_.uniform("u_region_half_size_m"), static_cast<float>(region_.half_size_m));

@@ -60,19 +60,6 @@ struct SelfShadowLight {
   float width_m = 0.0f;             // and width
 };
 
-// A virtual lamp's light on the ground as the composites add it
-// (virtual_lamp.glsl; passes/virtual_lamp_light makes it): the ratio at
-// 1 m below the lamp (0: no lamp) and the spot.
-struct GroundLampTerm {
-  glm::vec3 position_w{0.0f, 0.0f, 1.0f};
-  glm::vec3 ratio_at_one_metre{0.0f};
-  glm::vec3 spot_direction_w{0.0f, 0.0f, -1.0f};
-  glm::vec2 spot_cosines{-2.0f, -1.5f};
-  bool spot = false;
-};
-// Sets virtual_lamp.glsl's uniforms on `program` (in use).
-void setGroundLampUniforms(const gles::Program& program, const GroundLampTerm& lamp);
-
 class GroundShadow {
  public:
   bool init(const gles::Capabilities& capabilities, const GroundShadowSettings& settings, std::string& error);
@@ -87,11 +74,11 @@ class GroundShadow {
   // the bound framebuffer (which holds the camera background, drawn 1:1):
   // only the part of the square the shadow darkens by at least one 8-bit
   // step. Nothing when there is no shadow.
-  // exposure_gain: the frame darkened, as drawCameraBackground's; `lamp`:
-  // a virtual lamp's light added to the fraction there (none: no lamp).
+  // exposure_gain: the frame darkened, as drawCameraBackground's. (With
+  // a virtual lamp, VirtualLampLight's whole-frame draw gives the ground
+  // this fraction instead.)
   bool drawOnCameraImage(const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
-                         const CameraFrameTexture& camera_frame, std::string& error, double exposure_gain = 1.0,
-                         const GroundLampTerm* lamp = nullptr);
+                         const CameraFrameTexture& camera_frame, std::string& error, double exposure_gain = 1.0);
 
   bool hasShadow() const { return has_shadow_; }
   // The lights of the last update with their near-side maps (empty unless

@@ -173,17 +173,6 @@ bool VirtualLampLight::updateShadow(const ibl::VirtualLamp& lamp, const std::vec
   return gles::checkGl("VirtualLampLight::updateShadow", error);
 }
 
-GroundLampTerm VirtualLampLight::groundTerm(const glm::dvec3& ratio_at_one_metre_rgb) const {
-  GroundLampTerm term;
-  term.position_w = glm::vec3(lamp_.position_w);
-  term.ratio_at_one_metre = glm::vec3(ratio_at_one_metre_rgb);
-  term.spot_direction_w = glm::vec3(glm::normalize(lamp_.spot_direction_w));
-  const ibl::SpotCosines cosines = ibl::spotCosines(lamp_);
-  term.spot_cosines = glm::vec2(static_cast<float>(cosines.outer), static_cast<float>(cosines.inner));
-  term.spot = lamp_.spot_half_angle_deg < 180.0;
-  return term;
-}
-
 bool VirtualLampLight::drawPass(bool detail, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                                 const CameraFrameTexture& camera_frame, const RigGeometry& rig, const Frame& frame,
                                 std::string& error) {
@@ -200,7 +189,14 @@ bool VirtualLampLight::drawPass(bool detail, const CameraIntrinsics& camera, con
   glUniform3fv(p.uniform("u_vertex_lamp_w"), 1, glm::value_ptr(lamp_at));
   glUniform3fv(p.uniform("u_vertex_ratio_at_one_metre"), 1, glm::value_ptr(ratio_1m));
   glUniform1f(p.uniform("u_vertex_exposure_gain"), static_cast<float>(frame.exposure_gain));
-  setGroundLampUniforms(p, groundTerm(frame.ratio_at_one_metre_rgb));
+  // virtual_lamp.glsl's lamp.
+  glUniform3fv(p.uniform("u_lamp_w"), 1, glm::value_ptr(lamp_at));
+  glUniform3fv(p.uniform("u_lamp_ratio_at_one_metre"), 1, glm::value_ptr(ratio_1m));
+  const glm::vec3 spot_direction(glm::normalize(lamp_.spot_direction_w));
+  glUniform3fv(p.uniform("u_spot_direction_w"), 1, glm::value_ptr(spot_direction));
+  const ibl::SpotCosines cosines = ibl::spotCosines(lamp_);
+  glUniform2f(p.uniform("u_spot_cosines"), static_cast<float>(cosines.outer), static_cast<float>(cosines.inner));
+  glUniform1f(p.uniform("u_spot"), lamp_.spot_half_angle_deg < 180.0 ? 1.0f : 0.0f);
   glUniform2f(p.uniform("u_image_size_px"), static_cast<float>(camera.width_px), static_cast<float>(camera.height_px));
   if (settings_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma)
     glUniform1f(p.uniform("u_camera_gamma"), static_cast<float>(settings_.camera_transfer.gamma));
@@ -217,11 +213,11 @@ bool VirtualLampLight::drawPass(bool detail, const CameraIntrinsics& camera, con
   const GLboolean scissor_was = glIsEnabled(GL_SCISSOR_TEST);
   GLint saved_box[4] = {0, 0, 0, 0};
   glGetIntegerv(GL_SCISSOR_BOX, saved_box);
+  const ibl::GroundRegion dome_region = dome ? frame.dome_shadow->region() : ibl::GroundRegion{};
+  glUniform2f(p.uniform("u_dome_centre_w"), static_cast<float>(dome_region.centre_w.x),
+              static_cast<float>(dome_region.centre_w.y));
+  glUniform1f(p.uniform("u_dome_half_size_m"), dome ? static_cast<float>(dome_region.half_size_m) : 0.0f);
   if (detail) {
-    const ibl::GroundRegion dome_region = dome ? frame.dome_shadow->region() : ibl::GroundRegion{};
-    glUniform2f(p.uniform("u_dome_centre_w"), static_cast<float>(dome_region.centre_w.x),
-                static_cast<float>(dome_region.centre_w.y));
-    glUniform1f(p.uniform("u_dome_half_size_m"), dome ? static_cast<float>(dome_region.half_size_m) : 0.0f);
     glUniform2f(p.uniform("u_mask_centre_w"), static_cast<float>(mask_square_.centre_w.x),
                 static_cast<float>(mask_square_.centre_w.y));
     glUniform1f(p.uniform("u_mask_half_size_m"), casts_shadow_ ? static_cast<float>(mask_square_.half_size_m) : 0.0f);

@@ -64,15 +64,15 @@ class VirtualLampLight {
     const GroundShadow* dome_shadow = nullptr;  // its fraction, where it has a shadow
     double exposure_gain = 1.0;
   };
-  // Over the bound framebuffer (the frame 1:1), in two draws around the
-  // ground shadow's composite (whose cells then add groundTerm()):
+  // Over the bound framebuffer (the frame 1:1), in two draws that stand
+  // in for the background's and the ground shadow's (drawOnCameraImage):
   // drawSmooth, the whole frame: the camera's image times the exposure
-  // gain, with the ground lit by the lamp, unshadowed; drawDetail, cut to
-  // the frame's rectangle about the object's shadow from the lamp and the
-  // rig's ball and post (which are not ground), everything: the dome's
-  // shadow, the lamp hidden by the object, the rig in front. (One draw of
-  // everything over the frame cost 16 ms on llvmpipe, which pays for every
-  // branch at every pixel.)
+  // gain, with the ground darkened by the dome's shadow and lit by the
+  // lamp, unshadowed; drawDetail, cut to the frame's rectangle about the
+  // object's shadow from the lamp and the rig's ball and post (which are
+  // not ground), everything: the dome's shadow, the lamp hidden by the
+  // object, the rig in front. (One draw of everything over the frame cost
+  // 16 ms on llvmpipe, which pays for every branch at every pixel.)
   bool drawSmooth(const CameraIntrinsics& camera, const PoseCamFromWorld& pose, const CameraFrameTexture& camera_frame,
                   const RigGeometry& rig, const Frame& frame, std::string& error) {
     return drawPass(false, camera, pose, camera_frame, rig, frame, error);
@@ -81,10 +81,6 @@ class VirtualLampLight {
                   const RigGeometry& rig, const Frame& frame, std::string& error) {
     return drawPass(true, camera, pose, camera_frame, rig, frame, error);
   }
-  // The lamp's light as the ground shadow's composite adds it.
-  GroundLampTerm groundTerm(const glm::dvec3& ratio_at_one_metre_rgb) const;
-
-
  private:
   bool drawPass(bool detail, const CameraIntrinsics& camera, const PoseCamFromWorld& pose,
                 const CameraFrameTexture& camera_frame, const RigGeometry& rig, const Frame& frame, std::string& error);

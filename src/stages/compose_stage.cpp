@@ -222,13 +222,11 @@ Status ComposeStage::drawGround(bool object_drawn, const tracking::TagTrackResul
   lamp_frame.ratio_at_one_metre_rgb = ratio;
   lamp_frame.dome_shadow = shadows.enabled() ? &shadows.pass() : nullptr;
   lamp_frame.exposure_gain = exposure_gain_;
-  // The lamp over the frame (the background's draw: the depth alone is
-  // cleared), the shadow's cells with the lamp's light added, then near
-  // the object and the rig everything again.
+  // The lamp and the dome's shadow over the frame (the background's and
+  // the shadow's draws: the depth alone is cleared), then near the object
+  // and the rig everything again.
   compositor_.clearDepth();
-  const passes::GroundLampTerm ground_term = lamp_light_.groundTerm(ratio);
   if (!lamp_light_.drawSmooth(camera_, track.pose, frame, rig_, lamp_frame, error) ||
-      !shadows.pass().drawOnCameraImage(camera_, track.pose, frame, error, exposure_gain_, &ground_term) ||
       !lamp_light_.drawDetail(camera_, track.pose, frame, rig_, lamp_frame, error))
     return Status::runtimeFailure(error);
   // The object: the lamp seen from its middle (diffuse E / pi, in the
