@@ -42,7 +42,6 @@ uniform PLACE vec3 u_eye_w;
 uniform PLACE vec4 u_ball_w;      // centre, radius
 uniform PLACE vec3 u_post_w;      // x, y, radius (up to the ball's bottom)
 uniform float u_exposure_gain;    // the frame darkened as a shorter exposure would (1: not)
-uniform float u_transfer_root;    // 1 / the camera transfer's exponent (scaleEncodedCamera)
 uniform vec4 u_rig_rect_px;         // the ball's and post's window rectangle: x0, y0, x1, y1
 varying PLACE vec3 v_ray_w;
 
@@ -91,16 +90,18 @@ void main() {
   vec3 ratio = v_ray_w.z < 0.0 ? lampRatio(ground) : vec3(0.0);
 #ifndef LAMP_DETAIL
   // Over the frame: the camera's values scaled by gain x (s + ratio)
-  // without decoding them (camera_transfer.glsl). s is read everywhere and
-  // chosen by a step, not a branch: llvmpipe would pay for both sides. The
-  // fraction texture is exactly 1 (255) wherever the dome's shadow darkens
-  // by under half a step, so this is the shadow's own composite, folded in.
+  // (camera_transfer.glsl). s is read everywhere and chosen by a step, not
+  // a branch: llvmpipe would pay for both sides. The fraction texture is
+  // exactly 1 (255) wherever the dome's shadow darkens by under half a
+  // step, so this is the shadow's own composite, folded in. (Drawing it
+  // apart where the shadow's cells are, marked in the depth buffer, cost
+  // more on llvmpipe: its depth test does not spare the shader's work.)
   PLACE vec2 dome_uv = squareUv(ground.xy, u_dome_centre_w, max(u_dome_half_size_m, 1e-3));
   PLACE vec2 dome_inside = step(vec2(0.0), dome_uv) * step(dome_uv, vec2(1.0));
   float in_dome = dome_inside.x * dome_inside.y * step(1e-6, u_dome_half_size_m) * step(v_ray_w.z, 0.0);
   vec3 light = mix(vec3(1.0), texture2D(u_dome_shadow, dome_uv).rgb, in_dome);
   vec3 scale = u_exposure_gain * (light + ratio);
-  gl_FragColor = vec4(scaleEncodedCamera(encoded, scale, pow(scale, vec3(u_transfer_root))), 1.0);
+  gl_FragColor = vec4(scaleEncodedCamera(encoded, scale), 1.0);
 #else
   // Near the object and the rig (this variant's draw is cut to their
   // rectangle of the frame: a GPU without real branches, llvmpipe, would

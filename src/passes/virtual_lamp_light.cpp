@@ -184,11 +184,7 @@ bool VirtualLampLight::drawPass(bool detail, const CameraIntrinsics& camera, con
   glUniformMatrix3fv(p.uniform("u_world_from_cam"), 1, GL_FALSE, glm::value_ptr(world_from_cam));
   const glm::vec3 eye(pose.cameraCenterWorld());
   glUniform3fv(p.uniform("u_eye_w"), 1, glm::value_ptr(eye));
-  glUniform3fv(p.uniform("u_vertex_eye_w"), 1, glm::value_ptr(eye));
   const glm::vec3 lamp_at(lamp_.position_w), ratio_1m(frame.ratio_at_one_metre_rgb);
-  glUniform3fv(p.uniform("u_vertex_lamp_w"), 1, glm::value_ptr(lamp_at));
-  glUniform3fv(p.uniform("u_vertex_ratio_at_one_metre"), 1, glm::value_ptr(ratio_1m));
-  glUniform1f(p.uniform("u_vertex_exposure_gain"), static_cast<float>(frame.exposure_gain));
   // virtual_lamp.glsl's lamp.
   glUniform3fv(p.uniform("u_lamp_w"), 1, glm::value_ptr(lamp_at));
   glUniform3fv(p.uniform("u_lamp_ratio_at_one_metre"), 1, glm::value_ptr(ratio_1m));
@@ -201,11 +197,6 @@ bool VirtualLampLight::drawPass(bool detail, const CameraIntrinsics& camera, con
   if (settings_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma)
     glUniform1f(p.uniform("u_camera_gamma"), static_cast<float>(settings_.camera_transfer.gamma));
   glUniform1f(p.uniform("u_exposure_gain"), static_cast<float>(frame.exposure_gain));
-  const double transfer_exponent = settings_.camera_transfer.curve == ibl::CameraTransfer::Curve::kSrgb   ? 2.4
-                                   : settings_.camera_transfer.curve == ibl::CameraTransfer::Curve::kGamma ? settings_.camera_transfer.gamma
-                                                                                                            : 1.0;
-  glUniform1f(p.uniform("u_transfer_root"), static_cast<float>(1.0 / transfer_exponent));
-  glUniform1f(p.uniform("u_vertex_transfer_root"), static_cast<float>(1.0 / transfer_exponent));
   const bool dome = frame.dome_shadow != nullptr && frame.dome_shadow->hasShadow();
   const glm::vec4 rig_rect = rigWindowRect(camera, pose, rig);
   GLint viewport[4] = {0, 0, 0, 0};
