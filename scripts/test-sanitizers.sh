@@ -26,8 +26,26 @@ source scripts/sanitizer-options.sh
 # simulator's path tracing is about 10x slower: the accuracy suite took
 # 1470 of the run's 3400 test-seconds (about 12 of its 28 minutes on 2
 # cores, CI of 2026-12-05), and issue 17 holds CI to 75 minutes.
+#
+# Also left to the release run: five tests whose time here is the
+# simulator's rendering, each beside a shorter one that runs the same code
+# under the sanitizers (CI of 2026-12-07: 530 of the run's 2630
+# test-seconds; that CI took 86 of its 90 minutes):
+#   ProbeMergeRun.AHandHeldSweep... (195 s): the probe merge over a moving
+#     camera, as ProbeMergeRun.AMovingCamera... runs it;
+#   EndToEnd.LampSwitchingOnRefitsTheLightsWhenAsked (101 s): the refit on
+#     a lamp, as EndToEnd.LampSwitchingOnWithAStillCamera... and
+#     EndToEnd.KeyButtonRecalibratesTheLights run it;
+#   EndToEndLamp's 30 degree spot (42 s): the point light's run is the
+#     same code (the spot's weight is ibl's, in VirtualLamp.*);
+#   MeshTruth.AWindowRenders... and .AMeshBoxCasts... (152 s, 42 s): the
+#     simulator against itself, whose code every end-to-end test runs.
+sanitizer_skips='^(ProbeMergeRun\.AHandHeldSweepKeepsTheSunItsBracketMeasured'
+sanitizer_skips+='|EndToEnd\.LampSwitchingOnRefitsTheLightsWhenAsked'
+sanitizer_skips+='|PointAndSpot/EndToEndLamp\.LightsTheGroundAsTheSimulatorsLampDoes/30'
+sanitizer_skips+='|MeshTruth\.(AWindowRendersItsPixelsAsTheWholeFrameDoes|AMeshBoxCastsTheAnalyticBoxsShadow))$'
 (cd build-asan && ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --output-on-failure -j"$(nproc)" --timeout 1800 \
-  --label-exclude '^accuracy$')
+  --label-exclude '^accuracy$' --exclude-regex "$sanitizer_skips")
 if [[ $fuzz_seconds != 0 ]]; then
   scripts/fuzz.sh "$fuzz_seconds"
 fi
