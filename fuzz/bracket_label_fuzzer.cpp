@@ -13,7 +13,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   label.resize(std::min(label.size(), label.find('\0')));
   try {
     const AnalyzeOptions options = parseAnalyzeOptions(
-        {"--frame", "frame.png", "--camera", "camera.yaml", "--rig", "rig.yaml", "--out", "out", "--bracket", label});
+        {"--frame", "frame.png", "--calibration", "camera.yaml", "--rig", "rig.yaml", "--out", "out", "--bracket", label});
     fuzz::require(options.brackets.size() == 1, "one --bracket did not give one bracket frame");
     const BracketOption& bracket = options.brackets[0];
     if (bracket.ev_from_metadata) {

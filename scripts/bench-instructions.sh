@@ -28,7 +28,7 @@ printf '| run | frames tracked | instructions per frame in TagTracker::track |\n
 for config in reuse every_frame; do
   valgrind --tool=callgrind --callgrind-out-file="$work/$config.out" \
     --toggle-collect='probelight::tracking::TagTracker::track(*' \
-    "$probelight" run --source images --images "$work/replay/*.ppm" --camera "$work/capture/camera.yaml" \
+    "$probelight" run --source images --images "$work/replay/*.ppm" --calibration "$work/capture/camera.yaml" \
     --rig "$work/capture/rig.yaml" --config "$work/$config.yaml" --frames 0 --save-every 0 --quiet \
     --out "$work/run_$config" >/dev/null 2>"$work/$config.log"
   instructions=$(sed -n 's/^summary: *//p' "$work/$config.out")

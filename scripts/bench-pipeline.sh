@@ -57,7 +57,7 @@ for ((round = 1; round <= rounds; ++round)); do
     else
       config_flag=()
       [[ $config == defaults ]] || config_flag=(--config "$work/$config.yaml")
-      "$probelight" run --source images --images "$work/replay/*.ppm" --camera "$work/capture/camera.yaml" \
+      "$probelight" run --source images --images "$work/replay/*.ppm" --calibration "$work/capture/camera.yaml" \
         --rig "$work/capture/rig.yaml" "${config_flag[@]}" --frames 0 --save-every 0 --quiet --out "$out" >/dev/null
     fi
   done

@@ -49,7 +49,7 @@ mkfifo "$work/button"
 printf '%%YAML:1.0\n---\noutput:\n  save_every: 0\n  resources_every_frames: 1000\nfaults:\n  camera_loss_every_frames: %d\n  camera_loss_failed_restarts: 1\n' \
   "$loss_every" >"$work/soak.yaml"
 
-"$probelight" run --source images --images "$work/replay" --camera "$work/capture/camera.yaml" \
+"$probelight" run --source images --images "$work/replay" --calibration "$work/capture/camera.yaml" \
   --rig "$work/capture/rig.yaml" --config "$work/soak.yaml" --display headless --frames "$frames" \
   --button key --key-input "$work/button" --out "$out/run" --quiet 2>"$out/run.log" &
 pid=$!

@@ -137,7 +137,7 @@ class WhatTheKioskDraws(unittest.TestCase):
             write_png(bars, frozen(colour_bars(640, 480)), lambda y: 0)
             out = os.path.join(folder, "out")
             run = subprocess.run([os.environ["PROBELIGHT_BINARY"], "run", "--source", "images", "--images", bars,
-                                  "--camera", os.path.join(repository, "board", "camera.yaml"),
+                                  "--calibration", os.path.join(repository, "board", "camera.yaml"),
                                   "--rig", os.path.join(repository, "board", "rig.yaml"), "--display", "headless",
                                   "--frames", "1", "--save-every", "1", "--out", out],
                                  capture_output=True, text=True, timeout=120)

@@ -136,6 +136,11 @@ const Command kCalibrateCamera{"calibrate-camera",
                                "exit status: 0 ok, 1 runtime failure,\n"
                                "             2 bad flags, no matching files or too few usable views"};
 
+const Command kCameras{"cameras",
+                       "lists the cameras libcamera finds: each one's id (for --camera-id or camera.id), model,\n"
+                       "and the pixel formats and sizes its viewfinder stream offers",
+                       "exit status: 0 ok (no camera is said in one line), 1 libcamera did not start, 2 bad flags"};
+
 using FlagSetter = std::function<void(const std::string& flag, const std::string& value)>;
 
 // A flag with a value. The setter gets the flag's long name (for messages)
@@ -167,6 +172,20 @@ std::string oneLine(std::string text) {
   return text;
 }
 
+
+// --camera named the calibration file until --camera-id came: it is kept
+// for one release as --calibration's alias, saying so on stderr (the
+// warning goes to `warnings`; main prints it).
+ValuedFlag deprecatedCameraFlag(std::string& calibration_path, std::vector<std::string>& warnings) {
+  return {"--camera", "camera.yaml", "deprecated: --calibration's old name, kept for this release",
+          [&calibration_path, &warnings](const std::string&, const std::string& value) {
+            calibration_path = value;
+            const std::string warning =
+                "flag --camera is deprecated: it is --calibration now (the camera itself is --camera-id); "
+                "the old name goes in the next release";
+            if (warnings.empty() || warnings.back() != warning) warnings.push_back(warning);
+          }};
+}
 
 // CLI11 gives the structure (--flag value, --flag=value, short names, -h and
 // --help with its text); the setters convert, with messages naming the flag.
@@ -288,7 +307,12 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
         "write every camera frame as it came (its planes, exposure, gain, timestamp, format) to DIR, with "
         "camera.yaml and rig.yaml, for --source recording and analyze",
         into(options.record_dir)},
-       {"--camera", "camera.yaml", "camera calibration (sim: overrides the simulated camera)", into(options.camera_path)},
+       {"--calibration", "camera.yaml", "camera calibration (sim: overrides the simulated camera)",
+        into(options.camera_path)},
+       deprecatedCameraFlag(options.camera_path, options.warnings),
+       {"--camera-id", "ID",
+        "which camera, as probelight cameras lists it (--source libcamera; overrides camera.id, default the first)",
+        into(options.camera_id)},
        {"--rig", "rig.yaml", "tag and mirror-ball geometry (sim: overrides the simulated rig)", into(options.rig_path)},
        {"-c,--config", "probelight.yaml", "pipeline settings (see board/probelight.yaml)", into(options.config_path)},
        {"--display", "headless|kms",
@@ -315,7 +339,7 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
   if (options.source == "images" && options.images.empty())
     throw UsageError("flag --source images needs --images FOLDER_OR_GLOB");
   if (options.source == "images" && options.camera_path.empty())
-    throw UsageError("flag --source images needs --camera camera.yaml (the calibration of the camera that took them)");
+    throw UsageError("flag --source images needs --calibration camera.yaml (the calibration of the camera that took them)");
   if (options.source == "images" && options.rig_path.empty())
     throw UsageError("flag --source images needs --rig rig.yaml");
   if (options.source == "recording") {
@@ -329,7 +353,7 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
   if (!options.record_dir.empty() && options.record_dir == options.recording_dir)
     throw UsageError("flag --record: not the folder being replayed (--recording)");
   if (options.source == "libcamera" && options.camera_path.empty())
-    throw UsageError("flag --source libcamera needs --camera camera.yaml (its calibration, at the size to stream)");
+    throw UsageError("flag --source libcamera needs --calibration camera.yaml (its calibration, at the size to stream)");
   if (options.source == "libcamera" && options.rig_path.empty())
     throw UsageError("flag --source libcamera needs --rig rig.yaml");
   return options;
@@ -352,7 +376,9 @@ std::vector<ValuedFlag> frameFlags(AnalyzeOptions& options, const std::string& o
                options.more_views.push_back({value, {}});
            },
            true},
-          {"--camera", "camera.yaml", "the calibration of the camera that took it (required)", into(options.camera_path)},
+          {"--calibration", "camera.yaml", "the calibration of the camera that took it (required)",
+           into(options.camera_path)},
+          deprecatedCameraFlag(options.camera_path, options.warnings),
           {"--rig", "rig.yaml", "tag and mirror-ball geometry (required)", into(options.rig_path)},
           {"-o,--out", "DIR", out_description + " (required)", into(options.out_dir)},
           {"-c,--config", "probelight.yaml", "pipeline settings (optional, see board/probelight.yaml)",
@@ -373,7 +399,7 @@ std::vector<Switch> lightSwitches(AnalyzeOptions& options) {
 }  // namespace
 
 // A recorded frame's folder holds the calibration and rig it was seen
-// through (run --record): the defaults for --camera and --rig.
+// through (run --record): the defaults for --calibration and --rig.
 static void defaultToTheRecordingsFiles(AnalyzeOptions& options) {
   if (options.frame_path.empty() || !isRecordedFramePath(options.frame_path)) return;
   const std::filesystem::path dir = std::filesystem::path(options.frame_path).parent_path();
@@ -433,7 +459,7 @@ AnalyzeOptions parseAnalyzeOptions(const std::vector<std::string>& args) {
   // No defaults for these: analysing a frame with some other camera's
   // calibration, or writing over someone's folder, gives plausible nonsense.
   if (options.frame_path.empty()) throw UsageError("analyze needs --frame FILE (the camera frame to analyse)");
-  if (options.camera_path.empty()) throw UsageError("analyze needs --camera camera.yaml (the calibration of the camera that took it)");
+  if (options.camera_path.empty()) throw UsageError("analyze needs --calibration camera.yaml (the calibration of the camera that took it)");
   if (options.rig_path.empty()) throw UsageError("analyze needs --rig rig.yaml");
   if (options.out_dir.empty()) throw UsageError("analyze needs --out DIR (where analysis.json and the pictures go)");
   checkBracketCount(options);
@@ -494,7 +520,7 @@ RenderOptions parseRenderOptions(const std::vector<std::string>& args) {
   giveBracketsToTheirFrames(args, options.frame);
   defaultToTheRecordingsFiles(options.frame);
   if (options.frame.frame_path.empty()) throw UsageError("render needs --frame FILE (the camera frame)");
-  if (options.frame.camera_path.empty()) throw UsageError("render needs --camera camera.yaml (the calibration of the camera that took it)");
+  if (options.frame.camera_path.empty()) throw UsageError("render needs --calibration camera.yaml (the calibration of the camera that took it)");
   if (options.frame.rig_path.empty()) throw UsageError("render needs --rig rig.yaml");
   if (options.frame.out_dir.empty()) throw UsageError("render needs --out DIR (where composite.png and analysis.json go)");
   checkBracketCount(options.frame);
@@ -529,6 +555,12 @@ CalibrateCameraOptions parseCalibrateCameraOptions(const std::vector<std::string
   return options;
 }
 
+CamerasOptions parseCamerasOptions(const std::vector<std::string>& args) {
+  CamerasOptions options;
+  parseFlags(args, kCameras, {}, {});
+  return options;
+}
+
 std::string usageText() {
   std::string text = "probelight: image-based lighting for an AR kiosk (mirror ball + AprilTag)\n\n"
                      "usage: probelight COMMAND [flags]\n\n"
@@ -542,6 +574,7 @@ std::string usageText() {
   line(kAnalyze.name, "one frame in: what the system sees (DIR/analysis.json and pictures)");
   line(kRender.name, "a virtual object put into one frame, lit and shadowed (DIR/composite.png)");
   line(kCalibrateCamera.name, "chessboard views in, camera.yaml out");
+  line(kCameras.name, "the cameras libcamera finds, with their ids, formats and sizes");
   line("help, -h, --help", "this overview");
   line("--version", "the version");
   text += R"(

@@ -41,7 +41,8 @@ struct RunOptions {
   long long frames = 300;             // 0 = until the source ends
   std::string out_dir = "out";
   std::string config_path;            // probelight.yaml
-  std::string camera_path;            // camera.yaml
+  std::string camera_path;            // --calibration: camera.yaml
+  std::string camera_id;              // --camera-id: overrides camera.id
   std::string rig_path;               // rig.yaml
   std::string sim_env;                // overrides sim.env
   std::string sim_path;               // overrides sim.camera_path
@@ -49,6 +50,7 @@ struct RunOptions {
   std::optional<int> save_every;      // overrides output.save_every
   std::string capture_dir;            // --capture: the last camera frame, camera.yaml and rig.yaml go here
   bool quiet = false;
+  std::vector<std::string> warnings;  // flags that still work but are going (main prints them)
 };
 
 // Parses the flags after `probelight run`. Throws UsageError or
@@ -83,7 +85,8 @@ inline constexpr std::size_t kMaxAnalyzeViews = 16;
 
 struct AnalyzeOptions {
   std::string frame_path;   // the camera frame (PNG, JPEG, ...)
-  std::string camera_path;  // camera.yaml of the camera that took it
+  std::string camera_path;  // --calibration: camera.yaml of the camera that took it
+  std::vector<std::string> warnings;  // flags that still work but are going (main prints them)
   std::string rig_path;     // rig.yaml
   std::string out_dir;      // analysis.json and the pictures go here
   std::string config_path;  // probelight.yaml (optional)
@@ -115,7 +118,7 @@ struct MeshModel;
 namespace probelight {
 
 struct RenderOptions {
-  AnalyzeOptions frame;        // --frame, --camera, --rig, --out, --config
+  AnalyzeOptions frame;        // --frame, --calibration, --rig, --out, --config
   std::string object = "sphere";  // sphere | box | model
   double radius_m = 0.0;       // sphere: required
   glm::dvec3 box_size_m{0.0};  // box: --size X,Y,Z (required)
@@ -143,6 +146,10 @@ struct CalibrateCameraOptions {
 
 // Parses the flags after `probelight calibrate-camera`. Throws UsageError.
 CalibrateCameraOptions parseCalibrateCameraOptions(const std::vector<std::string>& args);
+
+// `probelight cameras` has no flags but -h.
+struct CamerasOptions {};
+CamerasOptions parseCamerasOptions(const std::vector<std::string>& args);
 
 // The overview for `probelight`, `probelight --help`: the commands, one line
 // each, and the exit statuses.

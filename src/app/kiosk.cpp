@@ -80,6 +80,7 @@ LoadedInputs loadInputs(const RunOptions& options) {
   if (!options.sim_env.empty()) inputs.settings.sim.env = options.sim_env;
   if (!options.sim_path.empty()) inputs.settings.sim.camera_path = options.sim_path;
   if (!options.model_path.empty()) inputs.settings.object.model_path = options.model_path;
+  if (!options.camera_id.empty()) inputs.settings.camera.id = options.camera_id;
   return inputs;
 }
 

@@ -9,6 +9,7 @@
 
 #include "app/analyze.hpp"
 #include "app/calibrate_camera.hpp"
+#include "app/list_cameras.hpp"
 #include "app/command_line.hpp"
 #include "app/exit_status.hpp"
 #include "app/kiosk.hpp"
@@ -37,9 +38,27 @@ int main(int argc, char** argv) {
   std::unique_ptr<JournalPrefixes> journal;
   if (stderrIsJournal()) journal = std::make_unique<JournalPrefixes>(std::cerr);
   try {
-    if (command == "run") return finishCommand(runKiosk(parseRunOptions(args), std::cerr), "", std::cerr);
-    if (command == "analyze") return finishCommand(runAnalyze(parseAnalyzeOptions(args), std::cerr), command, std::cerr);
-    if (command == "render") return finishCommand(runRender(parseRenderOptions(args), std::cerr), command, std::cerr);
+    // Flags that still work but are going: said once, before the command runs.
+    auto warn = [](const std::vector<std::string>& warnings) {
+      for (const std::string& warning : warnings)
+        std::cerr << logPrefix(LogPriority::kWarning) << "probelight: " << warning << "\n";
+    };
+    if (command == "run") {
+      const RunOptions options = parseRunOptions(args);
+      warn(options.warnings);
+      return finishCommand(runKiosk(options, std::cerr), "", std::cerr);
+    }
+    if (command == "analyze") {
+      const AnalyzeOptions options = parseAnalyzeOptions(args);
+      warn(options.warnings);
+      return finishCommand(runAnalyze(options, std::cerr), command, std::cerr);
+    }
+    if (command == "render") {
+      const RenderOptions options = parseRenderOptions(args);
+      warn(options.frame.warnings);
+      return finishCommand(runRender(options, std::cerr), command, std::cerr);
+    }
+    if (command == "cameras") return runListCameras(parseCamerasOptions(args), std::cout, std::cerr);
     if (command == "calibrate-camera") return runCalibrateCamera(parseCalibrateCameraOptions(args), std::cout, std::cerr);
     throw UsageError("unknown command '" + printable(command) + "' (see probelight --help)");
   } catch (const HelpRequested& help) {  // `probelight COMMAND --help` or -h

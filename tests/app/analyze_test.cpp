@@ -71,7 +71,7 @@ class Analyze : public testing::BinaryTest {
     EXPECT_TRUE(cv::imwrite((dir_ / "frame.png").string(), bgr));
     config::saveCameraFile((dir_ / "camera.yaml").string(), camera);
     config::saveRigFile((dir_ / "rig.yaml").string(), scene.rig);
-    return "analyze --frame " + (dir_ / "frame.png").string() + " --camera " + (dir_ / "camera.yaml").string() +
+    return "analyze --frame " + (dir_ / "frame.png").string() + " --calibration " + (dir_ / "camera.yaml").string() +
            " --rig " + (dir_ / "rig.yaml").string() + " --out " + (dir_ / "out").string();
   }
 
@@ -295,7 +295,7 @@ TEST_F(Analyze, NoTagIsExit3WithAValidFileSayingWhy) {
   cv::imwrite((dir_ / "grey.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(128, 128, 128)));
   config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
   config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
-  const CommandResult result = run("analyze --frame " + (dir_ / "grey.png").string() + " --camera " +
+  const CommandResult result = run("analyze --frame " + (dir_ / "grey.png").string() + " --calibration " +
                                    (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
                                    " --out " + (dir_ / "out").string());
   EXPECT_EQ(result.exit_status, kAnalyzeNotFoundExitStatus) << result.stderr_text;
@@ -487,7 +487,7 @@ TEST_F(Analyze, MissingFrameIsExit2NamingIt) {
   config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
   config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
   const fs::path missing = dir_ / "no_such_frame.png";
-  const CommandResult result = run("analyze --frame " + missing.string() + " --camera " +
+  const CommandResult result = run("analyze --frame " + missing.string() + " --calibration " +
                                    (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
                                    " --out " + (dir_ / "out").string());
   EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
@@ -527,7 +527,7 @@ TEST_F(Analyze, AFrameWhoseHeaderClaimsFourBillionPixelsIsExit2NamingIt) {
   std::ofstream(huge, std::ios::binary) << pngHeaderClaiming(65535, 65535);
   // The file is what the issue describes: OpenCV's decoder throws on it.
   EXPECT_THROW(cv::imread(huge.string(), cv::IMREAD_COLOR), cv::Exception);
-  const CommandResult result = run("analyze --frame " + huge.string() + " --camera " + (dir_ / "camera.yaml").string() +
+  const CommandResult result = run("analyze --frame " + huge.string() + " --calibration " + (dir_ / "camera.yaml").string() +
                                    " --rig " + (dir_ / "rig.yaml").string() + " --out " + (dir_ / "out").string());
   EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
   expectOneLine(result);
@@ -537,7 +537,7 @@ TEST_F(Analyze, AFrameWhoseHeaderClaimsFourBillionPixelsIsExit2NamingIt) {
   // The same file as all `run --source images` has to replay: skipped with a
   // warning naming it, no crash (a crash shows as 128 + the signal), and,
   // with no frame left to show, exit 2 saying so (not an empty run, exit 0).
-  const CommandResult replay = run("run --source images --images " + huge.string() + " --camera " +
+  const CommandResult replay = run("run --source images --images " + huge.string() + " --calibration " +
                                    (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
                                    " --display headless --frames 1 --out " + (dir_ / "replay").string());
   EXPECT_EQ(replay.exit_status, 2) << replay.stderr_text;
@@ -556,7 +556,7 @@ TEST_F(Analyze, AFrameOpenCvsDecoderComplainsAboutIsStillOneLine) {
   config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
   const fs::path bad = dir_ / "bad.png";
   std::ofstream(bad, std::ios::binary) << std::string("\x00\x00\x00\x0cjP  \r\n\x87\nXXXXXXXXXXXX", 24);
-  const CommandResult result = run("analyze --frame " + bad.string() + " --camera " + (dir_ / "camera.yaml").string() +
+  const CommandResult result = run("analyze --frame " + bad.string() + " --calibration " + (dir_ / "camera.yaml").string() +
                                    " --rig " + (dir_ / "rig.yaml").string() + " --out " + (dir_ / "out").string());
   EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
   expectOneLine(result);
@@ -580,7 +580,7 @@ TEST_F(Analyze, AFifoOrACutJpegAsTheFrameIsExit2NamingIt) {
   std::ofstream(cut, std::ios::binary).write(reinterpret_cast<const char*>(jpeg.data()),
                                              static_cast<std::streamsize>(jpeg.size()));
   for (const auto& [frame, says] : {std::pair{fifo, "not a regular file"}, std::pair{cut, "cut short"}}) {
-    const CommandResult result = run("analyze --frame " + frame.string() + " --camera " +
+    const CommandResult result = run("analyze --frame " + frame.string() + " --calibration " +
                                      (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
                                      " --out " + (dir_ / "out").string());
     EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
@@ -625,7 +625,7 @@ TEST_F(Analyze, AnOutFolderThatCannotBeMadeIsExit2InRunAndAnalyze) {
   expectOneLine(kiosk);
   EXPECT_NE(kiosk.stderr_text.find(out + ": cannot create the folder (--out)"), std::string::npos) << kiosk.stderr_text;
   cv::imwrite((dir_ / "frame.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(90, 90, 90)));
-  const CommandResult analysis = run("analyze --frame " + (dir_ / "frame.png").string() + " --camera " +
+  const CommandResult analysis = run("analyze --frame " + (dir_ / "frame.png").string() + " --calibration " +
                                      (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
                                      " --out " + out);
   EXPECT_EQ(analysis.exit_status, 2) << analysis.stderr_text;
@@ -637,7 +637,7 @@ TEST_F(Analyze, FrameOfAnotherSizeIsExit2NamingBothSizes) {
   cv::imwrite((dir_ / "small.png").string(), cv::Mat(240, 320, CV_8UC3, cv::Scalar(90, 90, 90)));
   config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});  // 640x480
   config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
-  const CommandResult result = run("analyze --frame " + (dir_ / "small.png").string() + " --camera " +
+  const CommandResult result = run("analyze --frame " + (dir_ / "small.png").string() + " --calibration " +
                                    (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
                                    " --out " + (dir_ / "out").string());
   EXPECT_EQ(result.exit_status, 2) << result.stderr_text;
@@ -691,7 +691,7 @@ TEST_F(Analyze, BadFlagsAndFilesAreExit2OneLine) {
   config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
   cv::imwrite((dir_ / "grey.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(128, 128, 128)));
   const std::string frame_and_camera =
-      "analyze --frame " + (dir_ / "grey.png").string() + " --camera " + (dir_ / "camera.yaml").string();
+      "analyze --frame " + (dir_ / "grey.png").string() + " --calibration " + (dir_ / "camera.yaml").string();
   struct Case {
     std::string args;
     std::string must_name;
@@ -900,7 +900,7 @@ TEST_F(AnalyzeBracket, MergedBracketMatchesTheHdrTruthAndBadFramesAreLeftOut) {
 TEST_F(Analyze, BadBracketFlagsAreExit2OneLine) {
   for (const char* bad : {"--bracket under.png", "--bracket under.png@", "--bracket @-3",
                                  "--bracket under.png@0", "--bracket under.png@-30", "--bracket under.png@x"}) {
-    const CommandResult result = run(std::string("analyze --frame f.png --camera c.yaml --rig r.yaml --out o ") + bad);
+    const CommandResult result = run(std::string("analyze --frame f.png --calibration c.yaml --rig r.yaml --out o ") + bad);
     EXPECT_EQ(result.exit_status, 2) << bad;
     EXPECT_NE(result.stderr_text.find("--bracket"), std::string::npos) << result.stderr_text;
     expectOneLine(result);

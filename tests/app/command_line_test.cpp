@@ -21,6 +21,35 @@ TEST(CommandLine, AcceptsFlagEqualsValue) {
   EXPECT_EQ(options.key_path, "/tmp/fifo");
 }
 
+// Issue 20: --camera named the calibration file; --calibration does now,
+// --camera stays one release as its alias and says so once, and
+// --camera-id picks the camera.
+TEST(CommandLine, CalibrationFlagAndItsDeprecatedAlias) {
+  RunOptions renamed = parseRunOptions({"--calibration", "cam.yaml", "--camera-id", "/base/usb@1"});
+  EXPECT_EQ(renamed.camera_path, "cam.yaml");
+  EXPECT_EQ(renamed.camera_id, "/base/usb@1");
+  EXPECT_TRUE(renamed.warnings.empty());
+  RunOptions old_name = parseRunOptions({"--camera", "old.yaml", "--camera=again.yaml"});
+  EXPECT_EQ(old_name.camera_path, "again.yaml");
+  ASSERT_EQ(old_name.warnings.size(), 1u);  // once, however often it is given
+  EXPECT_NE(old_name.warnings[0].find("--camera is deprecated"), std::string::npos);
+  EXPECT_NE(old_name.warnings[0].find("--calibration"), std::string::npos);
+  AnalyzeOptions analyze = parseAnalyzeOptions({"--frame", "f.png", "--camera", "c.yaml", "--rig", "r.yaml", "--out", "o"});
+  EXPECT_EQ(analyze.camera_path, "c.yaml");
+  EXPECT_EQ(analyze.warnings.size(), 1u);
+  RenderOptions render = parseRenderOptions({"--frame", "f.png", "--calibration", "c.yaml", "--rig", "r.yaml", "--out",
+                                             "o", "--object", "sphere", "--radius", "0.03"});
+  EXPECT_EQ(render.frame.camera_path, "c.yaml");
+  EXPECT_TRUE(render.frame.warnings.empty());
+  // The messages that ask for it give the new name.
+  try {
+    parseRunOptions({"--source", "images", "--images", "x/*.png", "--rig", "r.yaml"});
+    ADD_FAILURE() << "no error";
+  } catch (const UsageError& error) {
+    EXPECT_NE(std::string(error.what()).find("needs --calibration camera.yaml"), std::string::npos) << error.what();
+  }
+}
+
 // What `probelight run ARGS` says is wrong with its flags ("no error": nothing).
 std::string message(const std::vector<std::string>& args) {
   try {
@@ -43,7 +72,7 @@ TEST(CommandLine, BadFlagsNameTheFlag) {
   EXPECT_NE(message({"--frames"}).find("needs a value"), std::string::npos);
   EXPECT_NE(message({"--source", "webcam"}).find("--source"), std::string::npos);
   EXPECT_NE(message({"--source", "images"}).find("--images"), std::string::npos);
-  EXPECT_NE(message({"--source", "images", "--images", "x/*.png"}).find("--camera"), std::string::npos);
+  EXPECT_NE(message({"--source", "images", "--images", "x/*.png"}).find("--calibration"), std::string::npos);
   for (const auto& args : std::vector<std::vector<std::string>>{{"--bogus"}, {"--frames", "ten"}})
     EXPECT_EQ(message(args).find('\n'), std::string::npos) << "one line";
 }
@@ -55,7 +84,7 @@ TEST(CommandLine, BadFlagsNameTheFlag) {
 TEST(CommandLine, ArgumentsWithControlCharactersGiveOnePrintableLine) {
   std::string bracket_error;
   try {
-    parseAnalyzeOptions({"--frame", "f.png", "--camera", "c.yaml", "--rig", "r.yaml", "--out", "o", "--bracket",
+    parseAnalyzeOptions({"--frame", "f.png", "--calibration", "c.yaml", "--rig", "r.yaml", "--out", "o", "--bracket",
                          "\xc0\n\x01x@"});
   } catch (const UsageError& error) {
     bracket_error = error.what();
@@ -126,11 +155,11 @@ TEST(CommandLine, ShortFlagsParseLikeLongOnes) {
   }
   EXPECT_FALSE(parseRunOptions({}).quiet);
 
-  const AnalyzeOptions analyze = parseAnalyzeOptions({"-f", "f.png", "--camera", "c.yaml", "--rig", "r.yaml", "-o", "o", "-c", "p.yaml"});
+  const AnalyzeOptions analyze = parseAnalyzeOptions({"-f", "f.png", "--calibration", "c.yaml", "--rig", "r.yaml", "-o", "o", "-c", "p.yaml"});
   EXPECT_EQ(analyze.frame_path, "f.png");
   EXPECT_EQ(analyze.out_dir, "o");
   EXPECT_EQ(analyze.config_path, "p.yaml");
-  const RenderOptions render = parseRenderOptions({"-f", "f.png", "--camera", "c.yaml", "--rig", "r.yaml", "-o", "o", "--radius", "0.03"});
+  const RenderOptions render = parseRenderOptions({"-f", "f.png", "--calibration", "c.yaml", "--rig", "r.yaml", "-o", "o", "--radius", "0.03"});
   EXPECT_EQ(render.frame.frame_path, "f.png");
   EXPECT_EQ(render.frame.out_dir, "o");
   const CalibrateCameraOptions calibrate = parseCalibrateCameraOptions({"--images", "v/*.png", "--board", "9x6", "--square", "0.025", "-o", "c.yaml"});
@@ -144,7 +173,7 @@ TEST(CommandLine, ARepeatedFlagTakesItsLastValue) {
   EXPECT_EQ(options.out_dir, "b");
   EXPECT_EQ(options.source, "sim");
   const AnalyzeOptions analyze =
-      parseAnalyzeOptions({"--frame", "a.png", "--camera", "x.yaml", "--camera", "c.yaml", "--rig", "r.yaml", "--out", "o",
+      parseAnalyzeOptions({"--frame", "a.png", "--calibration", "x.yaml", "--calibration", "c.yaml", "--rig", "r.yaml", "--out", "o",
                            "--bracket", "u3.png@-3", "--bracket=o2.png@2"});
   EXPECT_EQ(analyze.camera_path, "c.yaml");
   ASSERT_EQ(analyze.brackets.size(), 2u) << "--bracket adds one each time";
@@ -157,7 +186,7 @@ TEST(CommandLine, ARepeatedFlagTakesItsLastValue) {
 // spelling (-f X, --frame X, --frame=X; --bracket X, --bracket=X).
 TEST(CommandLine, EachFrameTakesTheBracketsAfterIt) {
   const AnalyzeOptions analyze = parseAnalyzeOptions(
-      {"--bracket", "a3.png@-3", "--frame", "a.png", "--camera", "c.yaml", "-f", "b.png", "--bracket=b3.png@-3",
+      {"--bracket", "a3.png@-3", "--frame", "a.png", "--calibration", "c.yaml", "-f", "b.png", "--bracket=b3.png@-3",
        "--rig", "r.yaml", "--bracket", "b6.png@-6", "--frame=c.png", "--out", "o", "-f", "d.png", "--bracket",
        "d3.png@-3"});
   EXPECT_EQ(analyze.frame_path, "a.png");
@@ -174,7 +203,7 @@ TEST(CommandLine, EachFrameTakesTheBracketsAfterIt) {
   ASSERT_EQ(analyze.more_views[2].brackets.size(), 1u);
   EXPECT_EQ(analyze.more_views[2].brackets[0].path, "d3.png");
   // More than 16 views is refused.
-  std::vector<std::string> args = {"--camera", "c.yaml", "--rig", "r.yaml", "--out", "o"};
+  std::vector<std::string> args = {"--calibration", "c.yaml", "--rig", "r.yaml", "--out", "o"};
   for (int i = 0; i < 17; ++i) {
     // Appended in place: GCC 12's -Wrestrict misreads "f" + std::to_string(i).
     std::string frame = std::to_string(i);
@@ -195,7 +224,7 @@ TEST(CommandLine, EachFrameTakesTheBracketsAfterIt) {
 // view were all decoded and merged (issue 15, D17).
 TEST(CommandLine, BracketEvsBelowAnEighthOfAStopAndMoreThan16FramesAreRefused) {
   auto analyzeWith = [](const std::vector<std::string>& brackets) {
-    std::vector<std::string> args = {"--frame", "a.png", "--camera", "c.yaml", "--rig", "r.yaml", "--out", "o"};
+    std::vector<std::string> args = {"--frame", "a.png", "--calibration", "c.yaml", "--rig", "r.yaml", "--out", "o"};
     for (const std::string& b : brackets) args.insert(args.end(), {"--bracket", b});
     try {
       parseAnalyzeOptions(args);

@@ -398,7 +398,7 @@ TEST_F(EndToEnd, FramesWithoutATagStillShowAndSayWhy) {
   config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
 
   const fs::path out = dir_ / "out";
-  const CommandResult result = run("run --source images --images " + frames.string() + " --camera " +
+  const CommandResult result = run("run --source images --images " + frames.string() + " --calibration " +
                                    (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
                                    " --frames 0 --out " + out.string());
   ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
@@ -440,7 +440,7 @@ TEST_F(EndToEnd, BadInputIsOneLineNamingTheProblemAndExitStatus2) {
   std::ofstream(config) << "%YAML:1.0\n---\nenvironment_maps: [unclosed\n";
   expectOneLineError("run --config " + config.string(), config.string());
   expectOneLineError("run --config " + (dir_ / "missing.yaml").string(), "missing.yaml");
-  expectOneLineError("run --camera " + (dir_ / "nocamera.yaml").string(), "nocamera.yaml");
+  expectOneLineError("run --calibration " + (dir_ / "nocamera.yaml").string(), "nocamera.yaml");
 
   const fs::path rig = dir_ / "rig.yaml";
   std::ofstream(rig) << "%YAML:1.0\n---\ntag_family: tag36h11\ntag_id: 0\ntag_size: -0.1\nprobe_center: [0.1, 0, "
@@ -471,7 +471,7 @@ TEST_F(EndToEnd, CaptureKeepsTheLastRawFrameForAnalyze) {
   EXPECT_GT(cv::countNonZero(difference.reshape(1) > 40), 500) << "the kept frame must be the raw one";
   const CameraIntrinsics camera = config::loadCameraFile((capture / "camera.yaml").string());
   EXPECT_EQ(camera.width_px, raw.cols);
-  const CommandResult analyzed = run("analyze --frame " + (capture / "frame.png").string() + " --camera " +
+  const CommandResult analyzed = run("analyze --frame " + (capture / "frame.png").string() + " --calibration " +
                                      (capture / "camera.yaml").string() + " --rig " + (capture / "rig.yaml").string() +
                                      " --out " + (dir_ / "analysis").string());
   ASSERT_EQ(analyzed.exit_status, 0) << analyzed.stderr_text;

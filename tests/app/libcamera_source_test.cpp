@@ -52,14 +52,14 @@ TEST_F(LibcameraRun, RunWithoutACameraFailsWithOneLine) {
   config::saveCameraFile((dir_ / "camera.yaml").string(), CameraIntrinsics{});
   config::saveRigFile((dir_ / "rig.yaml").string(), RigGeometry{});
   ::setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0);
-  const testing::CommandResult result = run("run --source libcamera --camera " + (dir_ / "camera.yaml").string() +
+  const testing::CommandResult result = run("run --source libcamera --calibration " + (dir_ / "camera.yaml").string() +
                                             " --rig " + (dir_ / "rig.yaml").string() + " --frames 1 --out " +
                                             (dir_ / "out").string());
   EXPECT_EQ(result.exit_status, 1) << result.stderr_text;
   EXPECT_NE(result.stderr_text.find("libcamera found no camera"), std::string::npos) << result.stderr_text;
   const testing::CommandResult missing_camera_file = run("run --source libcamera --frames 1");
   EXPECT_EQ(missing_camera_file.exit_status, 2);
-  EXPECT_NE(missing_camera_file.stderr_text.find("--camera camera.yaml"), std::string::npos);
+  EXPECT_NE(missing_camera_file.stderr_text.find("--calibration camera.yaml"), std::string::npos);
 }
 
 }  // namespace

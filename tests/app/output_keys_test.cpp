@@ -99,7 +99,7 @@ class OutputKeys : public testing::BinaryTest {
     write("under6.png", -6.0);
     config::saveCameraFile((dir_ / "camera.yaml").string(), scene.camera);
     config::saveRigFile((dir_ / "rig.yaml").string(), scene.rig);
-    return "--frame " + (dir_ / "frame.png").string() + " --camera " + (dir_ / "camera.yaml").string() + " --rig " +
+    return "--frame " + (dir_ / "frame.png").string() + " --calibration " + (dir_ / "camera.yaml").string() + " --rig " +
            (dir_ / "rig.yaml").string();
   }
 };

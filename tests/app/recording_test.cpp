@@ -76,7 +76,7 @@ TEST_F(Recording, ARecordedRunReplaysFrameForFrameItsBracketIncluded) {
     for (const fs::path& frame : frames) shorter += readJson(frame)["exposure_us"].get<double>() < first_exposure_us;
     EXPECT_GE(shorter, 2);
 
-    // The replay: no --camera or --rig (the recording's own).
+    // The replay: no --calibration or --rig (the recording's own).
     const CommandResult result =
         run("run --source recording --recording " + recording.string() + " --frames 0 --save-every 1 --config " +
             (dir_ / (format + ".yaml")).string() + " --out " + replay.string());

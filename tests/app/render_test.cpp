@@ -40,7 +40,7 @@ class Render : public testing::BinaryTest {
     EXPECT_TRUE(cv::imwrite((dir_ / "frame.png").string(), bgr));
     config::saveCameraFile((dir_ / "camera.yaml").string(), scene_.camera);
     config::saveRigFile((dir_ / "rig.yaml").string(), scene_.rig);
-    return "render --frame " + (dir_ / "frame.png").string() + " --camera " + (dir_ / "camera.yaml").string() +
+    return "render --frame " + (dir_ / "frame.png").string() + " --calibration " + (dir_ / "camera.yaml").string() +
            " --rig " + (dir_ / "rig.yaml").string() + " --out " + (dir_ / "out").string();
   }
   nlohmann::json readAnalysis() const {
@@ -276,7 +276,7 @@ TEST_F(Render, FrameWithoutTagIsExit3AndNoComposite) {
   writeScene();
   cv::imwrite((dir_ / "grey.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(120, 120, 120)));
   const CommandResult result =
-      run("render --frame " + (dir_ / "grey.png").string() + " --camera " + (dir_ / "camera.yaml").string() + " --rig " +
+      run("render --frame " + (dir_ / "grey.png").string() + " --calibration " + (dir_ / "camera.yaml").string() + " --rig " +
           (dir_ / "rig.yaml").string() + " --out " + (dir_ / "out").string() + " --object sphere --radius 0.03");
   EXPECT_EQ(result.exit_status, 3) << result.stderr_text;
   EXPECT_FALSE(fs::exists(dir_ / "out" / "composite.png"));

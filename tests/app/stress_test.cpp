@@ -114,7 +114,7 @@ TEST_F(Stress, SaturatedAndBlackBallImagesAreSkippedAndTheMapsKept) {
   config::saveCameraFile((dir_ / "camera.yaml").string(), scene.camera);
   config::saveRigFile((dir_ / "rig.yaml").string(), scene.rig);
   const fs::path out = dir_ / "out";
-  const CommandResult result = run("run --source images --images " + frames_dir.string() + " --camera " +
+  const CommandResult result = run("run --source images --images " + frames_dir.string() + " --calibration " +
                                    (dir_ / "camera.yaml").string() + " --rig " + (dir_ / "rig.yaml").string() +
                                    " --display headless --frames 0 --out " + out.string());
   ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
@@ -190,7 +190,7 @@ TEST_F(Stress, BallCutByTheFrameEdgeIsSkipped) {
   config::saveCameraFile((dir_ / "camera.yaml").string(), camera);
   const fs::path out = dir_ / "out";
   const int frames = 6;
-  const CommandResult result = run("run --source sim --path static --camera " + (dir_ / "camera.yaml").string() +
+  const CommandResult result = run("run --source sim --path static --calibration " + (dir_ / "camera.yaml").string() +
                                    " --display headless --frames " + std::to_string(frames) + " --out " + out.string());
   ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
   EXPECT_NE(result.stderr_text.find("Mirror ball not fully in view"), std::string::npos) << result.stderr_text;

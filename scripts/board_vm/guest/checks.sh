@@ -152,8 +152,17 @@ host_request verify screen-sim screen-matches sim sim-headless/frame_000040.png 
 
 # ------------------------------------------------------------ 2. the camera
 timed_step "2. the camera path, headless, as the service's user"
+# probelight cameras lists vimc's camera with its id and the viewfinder's
+# formats and sizes (issue 20), and the run below picks it by that id.
+runuser -u probelight -- /usr/bin/probelight cameras >"$out/cameras.txt" 2>&1
+cameras_status=$?
+camera_id=$(sed -n 's/^   id: //p' "$out/cameras.txt" | head -n 1)
+format_lines=$(grep -c '^   [A-Z0-9]*: [0-9]' "$out/cameras.txt")
+pass_if cameras-listed "probelight cameras: exit $cameras_status; $(head -n 2 "$out/cameras.txt" | tr '\n' '|' | cut -c1-120); $format_lines format lines (guest/cameras.txt)" \
+  bash -c '[[ $1 == 0 && $2 == *[Vv]imc* && $3 -ge 1 ]] && grep -q "^   id: $2\$" "$4"' _ "$cameras_status" "$camera_id" "$format_lines" "$out/cameras.txt"
 runuser -u probelight -- /usr/bin/probelight run --config /etc/probelight/probelight.yaml \
-  --camera /etc/probelight/camera.yaml --rig /etc/probelight/rig.yaml --source libcamera --display headless \
+  --calibration /etc/probelight/camera.yaml --rig /etc/probelight/rig.yaml --source libcamera --display headless \
+  ${camera_id:+--camera-id "$camera_id"} \
   --frames 10 --save-every 10 --out /tmp/camera-run --record /tmp/camera-recording >"$out/camera-run.txt" 2>&1
 camera_status=$?
 mkdir -p "$out/camera-run"
@@ -201,7 +210,7 @@ pass_if camera-recording-analyzed "analyze --frame frame_000005.json: exit $anal
 # 640x480; vimc gives 636x480 nearest) is refused naming both, with exit
 # status 2: a configuration error that the unit does not restart.
 runuser -u probelight -- /usr/bin/probelight run --config /etc/probelight/probelight.yaml \
-  --camera /usr/share/doc/probelight/camera-template.yaml --rig /etc/probelight/rig.yaml --source libcamera \
+  --calibration /usr/share/doc/probelight/camera-template.yaml --rig /etc/probelight/rig.yaml --source libcamera \
   --display headless --frames 3 --out /tmp/camera-refused >"$out/camera-refused.txt" 2>&1
 refused_status=$?
 refusal=$(grep -m 1 '^probelight: camera: ' "$out/camera-refused.txt")
