@@ -16,6 +16,9 @@ packages=(
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
   # board backends (camera, KMS display, GPIO button, the systemd service's notifications)
   libcamera-dev libgbm-dev libdrm-dev libgpiod-dev libsystemd-dev
+  # the desktop window (--display window), and its tests: a headless X
+  # server, key presses sent to it, screenshots of it (xwd)
+  libsdl2-dev xvfb xdotool x11-apps
   # tests and benchmarks (systemd-analyze checks the unit file; assimp-testmodels:
   # the assimp project's glTF 2.0 files, valid and broken, read where Debian puts them)
   libgtest-dev libbenchmark-dev systemd assimp-testmodels

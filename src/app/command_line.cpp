@@ -315,9 +315,10 @@ RunOptions parseRunOptions(const std::vector<std::string>& args) {
         into(options.camera_id)},
        {"--rig", "rig.yaml", "tag and mirror-ball geometry (sim: overrides the simulated rig)", into(options.rig_path)},
        {"-c,--config", "probelight.yaml", "pipeline settings (see board/probelight.yaml)", into(options.config_path)},
-       {"--display", "headless|kms",
-        "headless (default: Mesa's EGL, frames written as PNG) or kms (fullscreen on the board's screen)",
-        [&](auto& f, auto& v) { requireChoice(f, v, {"headless", "kms"}); options.display = v; }},
+       {"--display", "headless|kms|window",
+        "headless (default: Mesa's EGL, frames written as PNG), kms (fullscreen on the board's screen) or window "
+        "(a desktop window: R or space recalibrates, hold R for the stored lighting, S saves, Q or Esc quits)",
+        [&](auto& f, auto& v) { requireChoice(f, v, {"headless", "kms", "window"}); options.display = v; }},
        {"--button", "none|key|gpio",
         "recalibration button (default none; key: lines on stdin or a FIFO; gpio: the board's button)",
         [&](auto& f, auto& v) { requireChoice(f, v, {"none", "key", "gpio"}); options.button = v; }},

@@ -35,7 +35,7 @@ struct RunOptions {
   std::string images;                 // folder or glob, for --source images
   std::string recording_dir;          // --recording: for --source recording
   std::string record_dir;             // --record: every camera frame goes here
-  std::string display = "headless";   // headless (kms comes with the board issue)
+  std::string display = "headless";   // headless | kms | window
   std::string button = "none";        // none | key
   std::string key_path = "-";         // stdin or a FIFO, for --button key
   long long frames = 300;             // 0 = until the source ends

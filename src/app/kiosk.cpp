@@ -29,6 +29,7 @@
 #include "core/log_priority.hpp"
 #include "core/monotonic_clock.hpp"
 #include "display/display.hpp"
+#include "display/window_display.hpp"
 #include "gles/capabilities.hpp"
 #include "input/button_source.hpp"
 #include "input/status_led.hpp"
@@ -117,6 +118,11 @@ class Kiosk {
         return Status::ok();
       }
       pollButton();
+      if (quit_requested_) {
+        log_ << logPrefix(LogPriority::kInfo) << "probelight: quit from the " << display_->name() << ": stopping after "
+             << frames_done_ << " frames\n";
+        return Status::ok();
+      }
       status_led_->set(ledLitAt(ledPatternFor(lights_->recalibrating(), camera_->lost()), monotonicNowS()));
       if (camera_->lost()) {
         PROBELIGHT_TRY(whileCameraLost());
@@ -170,6 +176,11 @@ class Kiosk {
     motion_->run(ctx.track, ctx.frame.metadata, ctx.time_s);
     lamp_exposure_->run(ctx.track.found && maps_->haveMaps(), ctx.track.pose, ctx.frame,
                         lights_->roomGroundIrradiance(), ctx.time_s);
+    // A display with keys says them in the status bar for its first
+    // seconds (beside whatever else the status says).
+    if (const std::string hint = display_->startupHint();
+        !hint.empty() && monotonicNowS() - loop_start_s_ < kStartupHintSeconds)
+      ctx.status = ctx.status.empty() ? hint : ctx.status + "  |  " + hint;
     PROBELIGHT_TRY(show(ctx.track, ctx.status, ctx.number));
     last_track_ = ctx.track;
     last_frame_number_ = ctx.number;
@@ -285,9 +296,16 @@ class Kiosk {
     return Status::ok();
   }
 
+  // The button (--button), and the display's own keys (a desktop window's
+  // R, long R, and its quit) as the same presses.
   void pollButton() {
-    for (const ButtonEvent& event : button_->poll()) {
-      if (event.kind == ButtonEvent::Kind::kLongPress)
+    std::vector<ButtonEvent::Kind> presses;
+    for (const ButtonEvent& event : button_->poll()) presses.push_back(event.kind);
+    const DisplayInput input = display_->pollInput();
+    presses.insert(presses.end(), input.button.begin(), input.button.end());
+    if (input.quit) quit_requested_ = true;
+    for (const ButtonEvent::Kind kind : presses) {
+      if (kind == ButtonEvent::Kind::kLongPress)
         lights_->onLongPress();
       else if (lights_->onButtonPress())
         maps_->requestFreshMap();  // the lights are fitted from a map made now
@@ -321,7 +339,10 @@ class Kiosk {
     PROBELIGHT_TRY(makeSource());
     const AppSettings& settings = inputs_.settings;
     std::string error;
-    display_ = makeDisplay(options_.display, options_.out_dir, settings.save_every, settings.display.kms, error);
+    WindowDisplaySettings window;
+    window.long_press_ms = settings.button.gpio.debounce.long_press_ms;
+    window.log = &log_;
+    display_ = makeDisplay(options_.display, options_.out_dir, settings.save_every, settings.display.kms, window, error);
     if (!display_ || !display_->open(inputs_.camera.width_px, inputs_.camera.height_px, error))
       return Status::runtimeFailure(error);
     capabilities_ = gles::probeCapabilities();
@@ -644,6 +665,9 @@ class Kiosk {
   std::unique_ptr<TruthMonitor> truth_;
 
   std::uint64_t frames_done_ = 0;
+  bool quit_requested_ = false;  // the display's quit key (a window's Q or Esc, or its close)
+  // How long a display's startupHint shows: long enough to read a line.
+  static constexpr double kStartupHintSeconds = 6.0;
   double loop_start_s_ = 0.0;  // the frame loop's start (monotonicNowS): report.json's elapsed_s, resources.csv's
   ResourceLog resources_{0};  // output.resources_every_frames (setUp)
   HeapReleasePolicy heap_release_;

@@ -7,9 +7,11 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/types.hpp"
 #include "display/image_write_queue.hpp"
+#include "input/button_source.hpp"
 
 namespace probelight {
 
@@ -17,6 +19,13 @@ namespace gles {
 class EglContext;
 class RenderTarget;
 }  // namespace gles
+
+// What the user asked through the display itself (a desktop window's
+// keys) since the last poll.
+struct DisplayInput {
+  std::vector<ButtonEvent::Kind> button;  // presses of the window's button key, in order
+  bool quit = false;                      // Q, Esc, or the window closed
+};
 
 class Display {
  public:
@@ -34,6 +43,11 @@ class Display {
   // Keep the next presented frame whatever else the display keeps (the last
   // frame of a run, say); a display that keeps no frames ignores it.
   virtual void keepNextFrame() {}
+  // Input through the display since the last call (none for a display
+  // without keys). Never blocks.
+  virtual DisplayInput pollInput() { return {}; }
+  // A line for the status bar while the kiosk starts (a window's keys), or "".
+  virtual std::string startupHint() const { return ""; }
   // Waits for the work present() left running (frames still being written).
   // False with a one-line reason when some of it failed.
   virtual bool finish(std::string& error) {
@@ -79,9 +93,12 @@ class HeadlessDisplay final : public Display {
 };
 
 struct KmsDisplaySettings;
+struct WindowDisplaySettings;
 
-// "headless" (out_dir, save_every) or "kms" (the board's screen, `kms`).
+// "headless" (out_dir, save_every), "kms" (the board's screen, `kms`) or
+// "window" (a desktop window, `window`; its saves go to out_dir).
 std::unique_ptr<Display> makeDisplay(const std::string& kind, const std::filesystem::path& out_dir, int save_every,
-                                     const KmsDisplaySettings& kms, std::string& error);
+                                     const KmsDisplaySettings& kms, const WindowDisplaySettings& window,
+                                     std::string& error);
 
 }  // namespace probelight

@@ -7,6 +7,7 @@
 #include "capture/rgb_image_io.hpp"
 #include "display/display.hpp"
 #include "display/kms_display.hpp"
+#include "display/window_display.hpp"
 #include "gles/egl_context.hpp"
 #include "gles/render_target.hpp"
 
@@ -75,10 +76,12 @@ std::string HeadlessDisplay::describe() const {
 }
 
 std::unique_ptr<Display> makeDisplay(const std::string& kind, const std::filesystem::path& out_dir, int save_every,
-                                     const KmsDisplaySettings& kms, std::string& error) {
+                                     const KmsDisplaySettings& kms, const WindowDisplaySettings& window,
+                                     std::string& error) {
   if (kind == "headless") return std::make_unique<HeadlessDisplay>(out_dir, save_every);
   if (kind == "kms") return std::make_unique<KmsDisplay>(kms);
-  error = "unknown display '" + kind + "' (choose headless or kms)";
+  if (kind == "window") return std::make_unique<WindowDisplay>(out_dir, window);
+  error = "unknown display '" + kind + "' (choose headless, kms or window)";
   return nullptr;
 }
 

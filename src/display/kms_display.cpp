@@ -16,8 +16,10 @@
 #include <xf86drm.h>
 #include <xf86drmMode.h>
 
+#include "display/letterbox_blit.hpp"
 #include "gles/egl_context.hpp"
 #include "gles/gl_objects.hpp"
+#include "gles/render_target.hpp"
 
 namespace probelight {
 
@@ -27,18 +29,6 @@ constexpr const char* kHeadlessHint = "; without a screen, use --display headles
 
 // The off-screen frame (GL convention: its row 0 is the picture's bottom
 // row, as composited) drawn over a viewport, unflipped.
-constexpr const char* kBlitVertex = R"(
-attribute vec2 a_position;
-varying vec2 v_texcoord;
-void main() {
-  v_texcoord = 0.5 * a_position + 0.5;
-  gl_Position = vec4(a_position, 0.0, 1.0);
-})";
-constexpr const char* kBlitFragment = R"(
-varying vec2 v_texcoord;
-uniform sampler2D u_frame;
-void main() { gl_FragColor = texture2D(u_frame, v_texcoord); })";
-
 void destroyFramebuffer(gbm_bo* bo, void* data) {
   const int fd = gbm_device_get_fd(gbm_bo_get_device(bo));
   const auto fb_id = static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(data));
@@ -49,11 +39,8 @@ void destroyFramebuffer(gbm_bo* bo, void* data) {
 
 struct KmsDisplay::Gpu {
   std::unique_ptr<gles::EglContext> context;
-  gles::Program blit;
-  gles::FullScreenQuad quad;
-  gles::Texture frame;
-  gles::Renderbuffer depth;
-  gles::Framebuffer target;
+  LetterboxBlit blit;
+  gles::RenderTarget frame;  // composed at the camera's size, then scaled onto the screen
 };
 
 KmsDisplay::KmsDisplay(KmsDisplaySettings settings) : settings_(std::move(settings)) {}
@@ -214,23 +201,8 @@ bool KmsDisplay::setUpEgl(std::string& error) {
 }
 
 bool KmsDisplay::setUpOffscreen(int width_px, int height_px, std::string& error) {
-  auto blit = gles::Program::fromSources("kms_blit.vert", kBlitVertex, "kms_blit.frag", kBlitFragment, "", error);
-  if (!blit || !gpu_->quad.init(error)) return false;
-  gpu_->blit = std::move(*blit);
-  auto frame = gles::createTexture2D(width_px, height_px, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, nullptr, error);
-  if (!frame) return false;
-  gpu_->frame = std::move(*frame);
-  gpu_->depth = gles::Renderbuffer::create();
-  glBindRenderbuffer(GL_RENDERBUFFER, gpu_->depth.id());
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT16, width_px, height_px);
-  gpu_->target = gles::Framebuffer::create();
-  glBindFramebuffer(GL_FRAMEBUFFER, gpu_->target.id());
-  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, gpu_->frame.id(), 0);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, gpu_->depth.id());
-  const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  if (status != GL_FRAMEBUFFER_COMPLETE) {
-    error = "display: off-screen frame incomplete: " + gles::framebufferStatusName(status);
+  if (!gpu_->blit.init(error) || !gpu_->frame.init(width_px, height_px, error, gles::RenderTarget::Colour::kTexture)) {
+    error = "display: off-screen frame: " + error;
     return false;
   }
   frame_width_ = width_px;
@@ -242,10 +214,7 @@ bool KmsDisplay::open(int width_px, int height_px, std::string& error) {
   return openDevice(error) && setUpEgl(error) && setUpOffscreen(width_px, height_px, error);
 }
 
-void KmsDisplay::beginFrame() {
-  glBindFramebuffer(GL_FRAMEBUFFER, gpu_->target.id());
-  glViewport(0, 0, frame_width_, frame_height_);
-}
+void KmsDisplay::beginFrame() { gpu_->frame.bind(); }
 
 bool KmsDisplay::flip(gbm_bo* bo, std::string& error) {
   auto fb_id = static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(gbm_bo_get_user_data(bo)));
@@ -288,20 +257,7 @@ bool KmsDisplay::flip(gbm_bo* bo, std::string& error) {
 bool KmsDisplay::present(std::uint64_t, std::string& error) {
   // The frame, scaled to fit the screen with its aspect kept, black around it.
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  glViewport(0, 0, screen_width_, screen_height_);
-  glDisable(GL_DEPTH_TEST);
-  glDisable(GL_BLEND);
-  glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
-  glClear(GL_COLOR_BUFFER_BIT);
-  const double scale = std::min(static_cast<double>(screen_width_) / frame_width_,
-                                static_cast<double>(screen_height_) / frame_height_);
-  const int w = static_cast<int>(frame_width_ * scale), h = static_cast<int>(frame_height_ * scale);
-  glViewport((screen_width_ - w) / 2, (screen_height_ - h) / 2, w, h);
-  gpu_->blit.use();
-  glActiveTexture(GL_TEXTURE0);
-  glBindTexture(GL_TEXTURE_2D, gpu_->frame.id());
-  glUniform1i(gpu_->blit.uniform("u_frame"), 0);
-  gpu_->quad.draw(gpu_->blit.attribute("a_position"));
+  gpu_->blit.draw(gpu_->frame.colourTexture(), frame_width_, frame_height_, screen_width_, screen_height_);
   if (!eglSwapBuffers(gpu_->context->display(), gpu_->context->surface())) {
     error = "display: eglSwapBuffers: " + gles::eglErrorName(eglGetError());
     return false;

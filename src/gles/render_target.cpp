@@ -5,21 +5,28 @@
 
 namespace probelight::gles {
 
-bool RenderTarget::init(int width_px, int height_px, std::string& error) {
+bool RenderTarget::init(int width_px, int height_px, std::string& error, Colour colour) {
   if (width_px <= 0 || height_px <= 0) {
     error = "render target size must be positive, got " + std::to_string(width_px) + "x" + std::to_string(height_px);
     return false;
   }
   width_px_ = width_px;
   height_px_ = height_px;
-  // GL_RGBA8_OES is an extension; GLES2 core colour renderbuffers stop at
-  // RGB565, so the colour buffer is a texture-less RGBA8 only where offered.
-  color_ = Renderbuffer::create();
-  glBindRenderbuffer(GL_RENDERBUFFER, color_.id());
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8_OES, width_px, height_px);
-  if (!checkGl("glRenderbufferStorage(GL_RGBA8_OES)", error)) {
-    error += ". The GPU lacks GL_OES_rgb8_rgba8; an 8-bit colour target is required.";
-    return false;
+  if (colour == Colour::kTexture) {
+    // RGBA8 textures are core GLES2; LINEAR, for a display that scales it.
+    auto texture = createTexture2D(width_px, height_px, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, nullptr, error);
+    if (!texture) return false;
+    colour_texture_ = std::move(*texture);
+  } else {
+    // GL_RGBA8_OES is an extension; GLES2 core colour renderbuffers stop at
+    // RGB565, so the colour buffer is a texture-less RGBA8 only where offered.
+    color_ = Renderbuffer::create();
+    glBindRenderbuffer(GL_RENDERBUFFER, color_.id());
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8_OES, width_px, height_px);
+    if (!checkGl("glRenderbufferStorage(GL_RGBA8_OES)", error)) {
+      error += ". The GPU lacks GL_OES_rgb8_rgba8; an 8-bit colour target is required.";
+      return false;
+    }
   }
   depth_ = Renderbuffer::create();
   glBindRenderbuffer(GL_RENDERBUFFER, depth_.id());
@@ -29,7 +36,10 @@ bool RenderTarget::init(int width_px, int height_px, std::string& error) {
 
   framebuffer_ = Framebuffer::create();
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_.id());
+  if (colour == Colour::kTexture)
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, colour_texture_.id(), 0);
+  else
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_.id());
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.id());
   const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -16,7 +16,10 @@ namespace probelight::gles {
 
 class RenderTarget {
  public:
-  bool init(int width_px, int height_px, std::string& error);
+  // kTexture: the colour buffer is a texture (colourTexture()) that a
+  // display samples to show the frame scaled; kRenderbuffer otherwise.
+  enum class Colour { kRenderbuffer, kTexture };
+  bool init(int width_px, int height_px, std::string& error, Colour colour = Colour::kRenderbuffer);
   // Binds the framebuffer and sets the viewport to its full size.
   void bind() const;
   // Reads the colour buffer into `image` (resized), top row first.
@@ -25,11 +28,13 @@ class RenderTarget {
   int widthPx() const { return width_px_; }
   int heightPx() const { return height_px_; }
   GLuint framebuffer() const { return framebuffer_.id(); }
+  GLuint colourTexture() const { return colour_texture_.id(); }  // 0 unless Colour::kTexture
 
  private:
   int width_px_ = 0;
   int height_px_ = 0;
   Renderbuffer color_;
+  Texture colour_texture_;
   Renderbuffer depth_;
   Framebuffer framebuffer_;
 };
