@@ -123,10 +123,14 @@ int runCalibrateCamera(const CalibrateCameraOptions& options, std::ostream& out,
 
   std::vector<View> views;
   cv::Size image_size;
+  // A line per view as it is read (the board's search takes a while on a
+  // big set): found on stdout, rejected on stderr, each with its place.
+  std::string place;
   auto reject = [&](const std::string& path, const std::string& reason) {
-    log << prefix << "rejected " << path << ": " << reason << "\n";
+    log << prefix << place << "rejected " << path << ": " << reason << "\n";
   };
   for (const std::string& path : files) {
+    place = "[" + std::to_string(&path - files.data() + 1) + "/" + std::to_string(files.size()) + "] ";
     // Grey is what the detector and cornerSubPix work on; colour adds nothing.
     std::string why;
     const cv::Mat grey = readImageFile(path, cv::IMREAD_GRAYSCALE, &why);
@@ -154,8 +158,10 @@ int runCalibrateCamera(const CalibrateCameraOptions& options, std::ostream& out,
     const int half = subPixHalfWindow(corners, board);
     cv::cornerSubPix(grey, corners, cv::Size(half, half), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 40, 0.001));
+    out << place << path << ": board found\n" << std::flush;
     views.push_back({path, std::move(corners), 0.0});
   }
+  place.clear();
 
   const auto too_few = [&](const std::string& what) {
     log << prefix << "only " << views.size() << " usable view" << (views.size() == 1 ? "" : "s") << " of "
@@ -167,6 +173,7 @@ int runCalibrateCamera(const CalibrateCameraOptions& options, std::ostream& out,
 
   Fit fit;
   try {
+    out << "fitting the camera to " << views.size() << " views\n" << std::flush;
     fit = calibrate(views, board_points, image_size);
     // A view far worse than the rest (corners found on the wrong squares,
     // motion blur, a bent board) pulls the whole fit. Drop views above both

@@ -1,5 +1,6 @@
 #include "app/command_line.hpp"
 #include "capture/frame_recording.hpp"
+#include "app/print_tag.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -140,6 +141,11 @@ const Command kCameras{"cameras",
                        "lists the cameras libcamera finds: each one's id (for --camera-id or camera.id), model,\n"
                        "and the pixel formats and sizes its viewfinder stream offers",
                        "exit status: 0 ok (no camera is said in one line), 1 libcamera did not start, 2 bad flags"};
+
+const Command kPrintTag{"print-tag",
+                        "the rig's AprilTag as a PNG to print, to scale: rig.yaml's family, id and size, with a\n"
+                        "50 mm scale bar; the file says its resolution, so print it at 100% (actual size)",
+                        "exit status: 0 ok, 1 the file could not be written, 2 bad flags or rig.yaml"};
 
 using FlagSetter = std::function<void(const std::string& flag, const std::string& value)>;
 
@@ -556,6 +562,19 @@ CalibrateCameraOptions parseCalibrateCameraOptions(const std::vector<std::string
   return options;
 }
 
+PrintTagOptions parsePrintTagOptions(const std::vector<std::string>& args) {
+  PrintTagOptions options;
+  parseFlags(args, kPrintTag,
+             {{"--rig", "rig.yaml", "the tag's family, id and tag_size (default: tag36h11 id 0, 100 mm, as board/rig.yaml)",
+               [&](auto&, auto& v) { options.rig_path = v; }},
+              {"-o,--out", "tag.png", "where the sheet goes (required)", [&](auto&, auto& v) { options.out_path = v; }},
+              {"--dpi", "N", "the sheet's resolution, 72 to 1200 dots per inch (default 300)",
+               [&](auto& f, auto& v) { options.dots_per_inch = static_cast<int>(parseInteger(f, v, 72, 1200)); }}},
+             {});
+  if (options.out_path.empty()) throw UsageError("print-tag needs --out tag.png");
+  return options;
+}
+
 CamerasOptions parseCamerasOptions(const std::vector<std::string>& args) {
   CamerasOptions options;
   parseFlags(args, kCameras, {}, {});
@@ -576,6 +595,7 @@ std::string usageText() {
   line(kRender.name, "a virtual object put into one frame, lit and shadowed (DIR/composite.png)");
   line(kCalibrateCamera.name, "chessboard views in, camera.yaml out");
   line(kCameras.name, "the cameras libcamera finds, with their ids, formats and sizes");
+  line(kPrintTag.name, "the rig's AprilTag as a PNG to print, to scale");
   line("help, -h, --help", "this overview");
   line("--version", "the version");
   text += R"(

@@ -147,6 +147,9 @@ struct CalibrateCameraOptions {
 // Parses the flags after `probelight calibrate-camera`. Throws UsageError.
 CalibrateCameraOptions parseCalibrateCameraOptions(const std::vector<std::string>& args);
 
+struct PrintTagOptions;
+PrintTagOptions parsePrintTagOptions(const std::vector<std::string>& args);
+
 // `probelight cameras` has no flags but -h.
 struct CamerasOptions {};
 CamerasOptions parseCamerasOptions(const std::vector<std::string>& args);

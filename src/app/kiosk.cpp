@@ -149,6 +149,24 @@ class Kiosk {
     return Status::ok();
   }
 
+  // The display's save key (a window's S): the camera's own frame, as it
+  // came and converted to RGB, beside the composite the display saves:
+  // OUT/camera_NNNNNN.png, for calibrate-camera's views or analyze. A
+  // failed write is said and the run goes on.
+  void saveCameraFrame(const FrameContext& ctx) {
+    camera_frame_save_due_ = false;
+    char name[40];
+    std::snprintf(name, sizeof name, "camera_%06llu.png", static_cast<unsigned long long>(ctx.number));
+    const std::string path = (fs::path(options_.out_dir) / name).string();
+    std::string error;
+    if (!writeRgbPng(path, ctx.frame.toRgb(), error)) {
+      log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << error << "\n";
+      return;
+    }
+    report_.count("camera_frames_saved");
+    log_ << "probelight: S: saving the camera's frame as " << path << "\n";
+  }
+
   // The events whose temporaries dwarf a frame's (heap_release.hpp).
   long long heavyEventsSoFar() const {
     return report_.counter("calibrations_completed") + report_.counter("calibrations_failed") +
@@ -157,6 +175,7 @@ class Kiosk {
   }
 
   Status processFrame(FrameContext& ctx) {
+    if (camera_frame_save_due_) saveCameraFrame(ctx);
     if (!frameFitsCalibration(ctx.frame)) return Status::ok();
     // A bracket's frames, and those after it still at its exposures, are not
     // the picture's: the last frame stays on screen.
@@ -304,6 +323,7 @@ class Kiosk {
     const DisplayInput input = display_->pollInput();
     presses.insert(presses.end(), input.button.begin(), input.button.end());
     if (input.quit) quit_requested_ = true;
+    if (input.saves > 0) camera_frame_save_due_ = true;
     for (const ButtonEvent::Kind kind : presses) {
       if (kind == ButtonEvent::Kind::kLongPress)
         lights_->onLongPress();
@@ -665,6 +685,7 @@ class Kiosk {
   std::unique_ptr<TruthMonitor> truth_;
 
   std::uint64_t frames_done_ = 0;
+  bool camera_frame_save_due_ = false;  // the display's save key: the next camera frame too
   bool quit_requested_ = false;  // the display's quit key (a window's Q or Esc, or its close)
   // How long a display's startupHint shows: long enough to read a line.
   static constexpr double kStartupHintSeconds = 6.0;

@@ -10,6 +10,7 @@
 #include "app/analyze.hpp"
 #include "app/calibrate_camera.hpp"
 #include "app/list_cameras.hpp"
+#include "app/print_tag.hpp"
 #include "app/command_line.hpp"
 #include "app/exit_status.hpp"
 #include "app/kiosk.hpp"
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
       return finishCommand(runRender(options, std::cerr), command, std::cerr);
     }
     if (command == "cameras") return runListCameras(parseCamerasOptions(args), std::cout, std::cerr);
+    if (command == "print-tag") return runPrintTag(parsePrintTagOptions(args), std::cout, std::cerr);
     if (command == "calibrate-camera") return runCalibrateCamera(parseCalibrateCameraOptions(args), std::cout, std::cerr);
     throw UsageError("unknown command '" + printable(command) + "' (see probelight --help)");
   } catch (const HelpRequested& help) {  // `probelight COMMAND --help` or -h

@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <cmath>
 #include <cstring>
 #include <memory>
 #include <new>
@@ -61,7 +62,7 @@ struct CompressorDeleter {
 // one that helps most on camera frames), and the filtered rows deflated in
 // one call into a single IDAT chunk. Empty when the compressor cannot be
 // allocated.
-std::vector<std::uint8_t> encodePng(const std::uint8_t* pixels, int width, int height) {
+std::vector<std::uint8_t> encodePng(const std::uint8_t* pixels, int width, int height, double pixels_per_metre) {
   // One compressor per writing thread, kept: allocating it costs more than
   // a small frame's compression.
   thread_local std::unique_ptr<libdeflate_compressor, CompressorDeleter> compressor(libdeflate_alloc_compressor(1));
@@ -91,6 +92,17 @@ std::vector<std::uint8_t> encodePng(const std::uint8_t* pixels, int width, int h
   // Bit depth 8, colour type 2 (RGB), compression 0, filter method 0, no interlace.
   file.insert(file.end(), {8, 2, 0, 0, 0});
   appendChunkCrc(file, type_at);
+  if (pixels_per_metre > 0.0) {
+    // pHYs: the physical size a viewer or printer shows it at (unit 1: metre).
+    const auto per_metre = static_cast<std::uint32_t>(std::lround(pixels_per_metre));
+    appendBigEndian32(file, 9);
+    type_at = file.size();
+    file.insert(file.end(), {'p', 'H', 'Y', 's'});
+    appendBigEndian32(file, per_metre);
+    appendBigEndian32(file, per_metre);
+    file.push_back(1);
+    appendChunkCrc(file, type_at);
+  }
   const std::size_t length_at = file.size();
   appendBigEndian32(file, 0);  // IDAT length, known once compressed
   type_at = file.size();
@@ -112,7 +124,7 @@ std::vector<std::uint8_t> encodePng(const std::uint8_t* pixels, int width, int h
 
 }  // namespace
 
-bool writeRgbPng(const std::string& path, const ImageRGB8& rgb, std::string& error) {
+bool writeRgbPng(const std::string& path, const ImageRGB8& rgb, std::string& error, double pixels_per_metre) {
   if (rgb.width <= 0 || rgb.height <= 0 || rgb.pixels.size() < static_cast<std::size_t>(rgb.width) * rgb.height * 3) {
     error = path + ": no image to write";
     return false;
@@ -122,7 +134,7 @@ bool writeRgbPng(const std::string& path, const ImageRGB8& rgb, std::string& err
     error = path + ": " + std::strerror(errno);
     return false;
   }
-  const std::vector<std::uint8_t> bytes = encodePng(rgb.pixels.data(), rgb.width, rgb.height);
+  const std::vector<std::uint8_t> bytes = encodePng(rgb.pixels.data(), rgb.width, rgb.height, pixels_per_metre);
   const bool written = !bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), file) == bytes.size();
   const int write_errno = errno;
   // A full disk often shows only at the flush.

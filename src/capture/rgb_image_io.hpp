@@ -27,8 +27,9 @@ bool writeRgbImage(const std::string& path, const ImageRGB8& rgb, const std::vec
 // run-length strategy was about 2.5x faster than that, and libdeflate is
 // about 2x faster again for files about 15% larger (a 640x480 demo frame:
 // 7.7 ms and 428 KB against 14.4 ms and 372 KB). False, with `error` saying
-// why, when the file cannot be written.
-bool writeRgbPng(const std::string& path, const ImageRGB8& rgb, std::string& error);
+// why, when the file cannot be written. pixels_per_metre > 0: the file
+// says its physical size (a pHYs chunk), so a print at 100% is to scale.
+bool writeRgbPng(const std::string& path, const ImageRGB8& rgb, std::string& error, double pixels_per_metre = 0.0);
 // The largest image file read (a full-size 8192x8192 16-bit PNG is smaller).
 constexpr std::uint64_t kMaxImageFileBytes = 1ull << 30;
 

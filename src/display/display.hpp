@@ -25,6 +25,7 @@ class RenderTarget;
 struct DisplayInput {
   std::vector<ButtonEvent::Kind> button;  // presses of the window's button key, in order
   bool quit = false;                      // Q, Esc, or the window closed
+  int saves = 0;  // S: the display saves the frame it shows; the kiosk, the camera's frame under it
 };
 
 class Display {

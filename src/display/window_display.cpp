@@ -135,15 +135,17 @@ DisplayInput WindowDisplay::pollInput() {
   DisplayInput input;
   input.button = std::move(pending_.button);
   input.quit = pending_.quit;
+  input.saves = pending_.saves;
   saves_due_ += pending_.saves;
   pending_ = WindowActions{};
   return input;
 }
 
 bool WindowDisplay::present(std::uint64_t frame_number, std::string& error) {
+  // Keys pressed now reach the kiosk at its next pollInput (a save is
+  // made at the present after it: the frame the kiosk's camera frame
+  // belongs to).
   pumpEvents();
-  saves_due_ += pending_.saves;
-  pending_.saves = 0;
   if (saves_due_ > 0) {
     saves_due_ = 0;
     ImageRGB8 image;

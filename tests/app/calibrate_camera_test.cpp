@@ -187,6 +187,10 @@ TEST_F(CalibrateCamera, RejectsBadFilesWithReasonsAndStillCalibrates) {
             std::string::npos)
       << err;
   EXPECT_EQ(result.stdout_text.find("no_board.png"), std::string::npos);
+  // A line per view as it was read, with its place: found on stdout, rejected on stderr.
+  EXPECT_NE(err.find("] rejected " + (views / "no_board.png").string()), std::string::npos) << err;
+  EXPECT_NE(result.stdout_text.find(": board found"), std::string::npos) << result.stdout_text;
+  EXPECT_NE(result.stdout_text.find("fitting the camera to "), std::string::npos) << result.stdout_text;
 }
 
 TEST_F(CalibrateCamera, TooFewUsableViewsIsExit2WithOneLine) {

@@ -257,7 +257,8 @@ class WindowDisplayTest : public testing::BinaryTest {
 // centres is the texel), so the screenshot is the headless PNG of the same
 // still frame wherever the two runs composed the same frame: all but a
 // handful of values (under 0.01% more than 2 codes off; measured: 4
-// values of 921,600, 3 codes, mean 0.002). S saves what is shown; resized to
+// values of 921,600, 3 codes, mean 0.002). S saves what is shown, and
+// the camera's frame under it; resized to
 // 1000x500 the frame is letterboxed at its own 4:3 (667x500, centred: bars
 // of 166 and 167 px), black around it, and its content scaled, not
 // cropped; Q ends the run with exit 0 and its report.
@@ -299,6 +300,18 @@ TEST_F(WindowDisplayTest, ShowsTheHeadlessFrameSavesItKeepsItsAspectAndQuits) {
   const Difference saved_against_shown = compare(saved, *shown);
   EXPECT_LT(saved_against_shown.mean, 0.02);
   EXPECT_LT(saved_against_shown.over_two, 1e-4);
+  // And the camera's own frame under it (for calibrate-camera's views):
+  // the room without the virtual sphere, so unlike the composite.
+  ASSERT_TRUE(waitForLog("S: saving the camera's frame as")) << stderrText();
+  std::optional<fs::path> camera_frame;
+  for (const auto& entry : fs::directory_iterator(out))
+    if (entry.path().filename().string().rfind("camera_", 0) == 0) camera_frame = entry.path();
+  ASSERT_TRUE(camera_frame.has_value());
+  cv::Mat camera = cv::imread(camera_frame->string(), cv::IMREAD_COLOR);
+  ASSERT_EQ(camera.cols, 640);
+  ASSERT_EQ(camera.rows, 480);
+  cv::cvtColor(camera, camera, cv::COLOR_BGR2RGB);
+  EXPECT_GT(compare(camera, saved).over_two, 0.005);  // the sphere and its shadow are not in it
 
   // At the screen's corner first: xwd reads what the screen holds, and the
   // centred window would reach past its right edge.
@@ -335,6 +348,7 @@ TEST_F(WindowDisplayTest, ShowsTheHeadlessFrameSavesItKeepsItsAspectAndQuits) {
   EXPECT_NE(stderrText().find("quit from the window"), std::string::npos);
   const nlohmann::json report = readReport(out);
   EXPECT_GT(report["frames"].get<int>(), 30);
+  EXPECT_EQ(report["counters"].value("camera_frames_saved", 0), 1);
 }
 
 // R (and space) is the button: a tap recalibrates; held for the long press
