@@ -332,7 +332,7 @@ TEST_F(Stress, NanOrInfInAnyFloatFieldIsOneLineAndExit2) {
       yaml.replace(yaml.find("VALUE"), 5, value);
       const fs::path file = dir_ / (bad.file + ".yaml");
       writeText(file, yaml);
-      const std::string flag = bad.file == "probelight" ? "--config" : "--" + bad.file;
+      const std::string flag = bad.file == "probelight" ? "--config" : bad.file == "camera" ? "--calibration" : "--" + bad.file;
       const CommandResult result = run("run --source sim --display headless --frames 1 " + flag + " " +
                                        file.string() + " --out " + (dir_ / "out").string());
       const std::string context = bad.file + ".yaml " + bad.field + " = " + value + ": " + result.stderr_text;
