@@ -87,8 +87,12 @@ std::string formatCameraList(const std::vector<CameraListing>& cameras, std::siz
       std::sort(sizes.begin(), sizes.end(),
                 [](const auto& a, const auto& b) { return a.first * a.second < b.first * b.second; });
       if (sizes.empty()) {
-        line += " " + sizeText(format.range.min_width_px, format.range.min_height_px) + " to " +
-                sizeText(format.range.max_width_px, format.range.max_height_px);
+        // Appended piece by piece: GCC 12's -Wrestrict misreads
+        // `" " + std::string(...)` inlined here (a false alarm, GCC bug 105329).
+        line += ' ';
+        line += sizeText(format.range.min_width_px, format.range.min_height_px);
+        line += " to ";
+        line += sizeText(format.range.max_width_px, format.range.max_height_px);
       } else {
         // The smallest ones and the largest: the largest is what a user
         // looks for, the smallest what runs fastest.
@@ -98,7 +102,8 @@ std::string formatCameraList(const std::vector<CameraListing>& cameras, std::siz
             line += " ...";
             k = sizes.size() - 1;
           }
-          line += " " + sizeText(sizes[k].first, sizes[k].second);
+          line += ' ';
+          line += sizeText(sizes[k].first, sizes[k].second);
         }
       }
       text += line + "\n";
