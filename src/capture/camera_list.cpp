@@ -52,11 +52,18 @@ std::optional<std::vector<CameraListing>> listLibcameraCameras(std::string& erro
       for (const libcamera::PixelFormat& pixel_format : formats.pixelformats()) {
         CameraStreamFormat format;
         format.pixel_format = pixel_format.toString();
-        for (const libcamera::Size& size : formats.sizes(pixel_format))
-          format.sizes_px.emplace_back(static_cast<int>(size.width), static_cast<int>(size.height));
         const libcamera::SizeRange range = formats.range(pixel_format);
         format.range = {static_cast<int>(range.min.width), static_cast<int>(range.min.height),
-                        static_cast<int>(range.max.width), static_cast<int>(range.max.height)};
+                        static_cast<int>(range.max.width), static_cast<int>(range.max.height),
+                        static_cast<int>(range.hStep), static_cast<int>(range.vStep)};
+        // A range with steps is the camera's own (vimc's, a Pi's ISP):
+        // StreamFormats::sizes() would list common sizes that fit it, which
+        // the camera may still round (vimc: 640x480 to 636x480). Listed
+        // sizes, and a bound of them, come with steps of 0.
+        const bool camera_range = range.min != range.max && (range.hStep != 0 || range.vStep != 0);
+        if (!camera_range)
+          for (const libcamera::Size& size : formats.sizes(pixel_format))
+            format.sizes_px.emplace_back(static_cast<int>(size.width), static_cast<int>(size.height));
         listing.formats.push_back(std::move(format));
       }
     }
@@ -93,6 +100,11 @@ std::string formatCameraList(const std::vector<CameraListing>& cameras, std::siz
         line += sizeText(format.range.min_width_px, format.range.min_height_px);
         line += " to ";
         line += sizeText(format.range.max_width_px, format.range.max_height_px);
+        if (format.range.width_step_px > 1 || format.range.height_step_px > 1) {
+          line += ", in steps of ";
+          line += sizeText(format.range.width_step_px, format.range.height_step_px);
+        }
+        line += " (the camera may round a size; run says the nearest it takes)";
       } else {
         // The smallest ones and the largest: the largest is what a user
         // looks for, the smallest what runs fastest.

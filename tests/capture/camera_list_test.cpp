@@ -30,7 +30,7 @@ TEST(CameraList, EachCameraWithItsIdFormatsAndSizes) {
   webcam.location = "external";
   // Listed out of order: the text puts them smallest to largest.
   webcam.formats.push_back({"MJPEG", {{1280, 720}, {640, 480}, {320, 240}}, {320, 240, 1280, 720}});
-  webcam.formats.push_back({"YUYV", {}, {160, 120, 640, 480}});  // a range, no discrete sizes
+  webcam.formats.push_back({"YUYV", {}, {160, 120, 640, 480, 2, 2}});  // a range, no discrete sizes
   CameraListing many;
   many.id = "/base/many";
   for (int i = 1; i <= 12; ++i) many.formats.resize(1), many.formats[0].sizes_px.emplace_back(100 * i, 50 * i);
@@ -41,7 +41,7 @@ TEST(CameraList, EachCameraWithItsIdFormatsAndSizes) {
   EXPECT_EQ(text[1], "0: 'Integrated Camera', external");
   EXPECT_EQ(text[2], "   id: " + webcam.id);
   EXPECT_EQ(text[3], "   MJPEG: 320x240 640x480 1280x720");
-  EXPECT_EQ(text[4], "   YUYV: 160x120 to 640x480");
+  EXPECT_EQ(text[4], "   YUYV: 160x120 to 640x480, in steps of 2x2 (the camera may round a size; run says the nearest it takes)");
   EXPECT_EQ(text[5], "1: (no model given)");
   EXPECT_EQ(text[6], "   id: /base/many");
   // At most 4 shown: the three smallest, "...", the largest.
