@@ -155,9 +155,7 @@ class Kiosk {
   // failed write is said and the run goes on.
   void saveCameraFrame(const FrameContext& ctx) {
     camera_frame_save_due_ = false;
-    char name[40];
-    std::snprintf(name, sizeof name, "camera_%06llu.png", static_cast<unsigned long long>(ctx.number));
-    const std::string path = (fs::path(options_.out_dir) / name).string();
+    const std::string path = (fs::path(options_.out_dir) / numberedPngName("camera", ctx.number)).string();
     std::string error;
     if (!writeRgbPng(path, ctx.frame.toRgb(), error)) {
       log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << error << "\n";

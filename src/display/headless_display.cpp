@@ -38,9 +38,7 @@ bool HeadlessDisplay::open(int width_px, int height_px, std::string& error) {
       return false;
     }
   }
-  // writeRgbPng: OpenCV's PNG writer would cost more than a frame.
-  writer_ = std::make_unique<ImageWriteQueue>(
-      [](const std::string& path, const ImageRGB8& image, std::string& error) { return writeRgbPng(path, image, error); });
+  writer_ = makePngWriteQueue();
   return true;
 }
 
@@ -54,9 +52,7 @@ bool HeadlessDisplay::present(std::uint64_t frame_number, std::string& error) {
     return true;
   }
   if (!target_->readRGB(last_kept_, error)) return false;
-  char name[32];
-  std::snprintf(name, sizeof name, "frame_%06llu.png", static_cast<unsigned long long>(frame_number));
-  last_kept_path_ = out_dir_ / name;
+  last_kept_path_ = out_dir_ / numberedPngName("frame", frame_number);
   if (!writer_->push(last_kept_path_.string(), last_kept_, error)) {
     error = "headless display: " + error;
     return false;

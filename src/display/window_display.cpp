@@ -108,8 +108,7 @@ bool WindowDisplay::open(int width_px, int height_px, std::string& error) {
   }
   frame_width_ = width_px;
   frame_height_ = height_px;
-  writer_ = std::make_unique<ImageWriteQueue>(
-      [](const std::string& path, const ImageRGB8& image, std::string& error) { return writeRgbPng(path, image, error); });
+  writer_ = makePngWriteQueue();
   return true;
 }
 
@@ -152,9 +151,7 @@ bool WindowDisplay::present(std::uint64_t frame_number, std::string& error) {
     if (!frame_->readRGB(image, error)) return false;
     std::error_code ec;
     std::filesystem::create_directories(out_dir_, ec);
-    char name[40];
-    std::snprintf(name, sizeof name, "snapshot_%06llu.png", static_cast<unsigned long long>(frame_number));
-    const std::string path = (out_dir_ / name).string();
+    const std::string path = (out_dir_ / numberedPngName("snapshot", frame_number)).string();
     if (!writer_->push(path, image, error)) {
       error = "window display: " + error;
       return false;
