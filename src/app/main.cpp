@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,7 @@
 #include "app/exit_status.hpp"
 #include "app/kiosk.hpp"
 #include "core/log_priority.hpp"
+#include "sim/scene_config.hpp"
 
 #include <opencv2/core/utils/logger.hpp>
 
@@ -39,6 +41,13 @@ int main(int argc, char** argv) {
   std::unique_ptr<JournalPrefixes> journal;
   if (stderrIsJournal()) journal = std::make_unique<JournalPrefixes>(std::cerr);
   try {
+    // The simulator's thread count from the environment, checked before any
+    // scene is made (it is a default member of every SceneConfig).
+    try {
+      (void)sim::defaultRenderThreads();
+    } catch (const std::invalid_argument& error) {
+      throw UsageError(error.what());
+    }
     // Flags that still work but are going: said once, before the command runs.
     auto warn = [](const std::vector<std::string>& warnings) {
       for (const std::string& warning : warnings)

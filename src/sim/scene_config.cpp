@@ -1,8 +1,30 @@
 #include "sim/scene_config.hpp"
 
 #include <cmath>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
 
 namespace probelight::sim {
+
+int defaultRenderThreads() {
+  constexpr int kDefaultThreads = 2;
+  constexpr int kMostThreads = 64;
+  const char* text = std::getenv("PROBELIGHT_SIM_THREADS");
+  if (text == nullptr || *text == '\0') return kDefaultThreads;
+  int threads = 0;
+  for (const char* c = text; *c != '\0'; ++c) {
+    if (*c < '0' || *c > '9' || threads > kMostThreads) {
+      threads = 0;
+      break;
+    }
+    threads = threads * 10 + (*c - '0');
+  }
+  if (threads < 1 || threads > kMostThreads)
+    throw std::invalid_argument("PROBELIGHT_SIM_THREADS: a whole number from 1 to " + std::to_string(kMostThreads) +
+                                " expected, got '" + std::string(text) + "'");
+  return threads;
+}
 
 SceneConfig defaultScene() {
   SceneConfig scene;

@@ -73,6 +73,14 @@ struct CameraPathConfig {
   double random_max_distance_m = 0.75;
 };
 
+// The simulator's render threads: 2 (a desktop's spare cores beside the
+// kiosk's own), or the environment's PROBELIGHT_SIM_THREADS, a whole number
+// from 1 to 64. The tests' runner sets it to the processors it gives each
+// test (tests/tiers.cmake), so that two tests under `ctest -j2` do not put
+// four render threads on two cores. Throws std::invalid_argument, naming
+// the variable, for any other value.
+int defaultRenderThreads();
+
 struct SceneConfig {
   CameraIntrinsics camera;
   RigGeometry rig;
@@ -115,7 +123,9 @@ struct SceneConfig {
   // samples only).
   int edge_samples_per_axis = 8;
   std::uint64_t seed = 1;         // noise and random camera poses
-  int render_threads = 2;
+  // Threads that render a frame: 2, or PROBELIGHT_SIM_THREADS where set
+  // (defaultRenderThreads). The frame is the same for any count.
+  int render_threads = defaultRenderThreads();
 };
 
 // The default: 640x480, f=600 px, mild barrel distortion; tag36h11 id 0 of
