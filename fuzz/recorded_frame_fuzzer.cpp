@@ -30,6 +30,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::require(fuzz::finite(frame.metadata.exposure_us) && frame.metadata.exposure_us >= 0.0 &&
                     fuzz::finite(frame.metadata.analogue_gain) && frame.metadata.analogue_gain >= 0.0,
                 "a non-finite or negative exposure accepted");
+  if (frame.metadata.truth) {
+    const FrameTruth& truth = *frame.metadata.truth;
+    bool finite = fuzz::finite(truth.probe_radius_px) && fuzz::finite(truth.exposure) &&
+                  fuzz::finite(truth.probe_center_px.x) && fuzz::finite(truth.probe_center_px.y);
+    for (int c = 0; c < 3; ++c) {
+      finite = finite && fuzz::finite(truth.pose.t_cam_from_world[c]);
+      for (int r = 0; r < 3; ++r) finite = finite && fuzz::finite(truth.pose.R_cam_from_world[c][r]);
+    }
+    fuzz::require(finite && truth.probe_radius_px >= 0.0, "a non-finite or negative truth accepted");
+  }
   // Every pixel and the luma read (AddressSanitizer checks they stay in the bytes read).
   const ImageRGB8 rgb = frame.toRgb();
   fuzz::require(rgb.width == frame.width_px && rgb.height == frame.height_px, "a decoded frame of another size");

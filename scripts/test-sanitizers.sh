@@ -27,14 +27,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 fuzz_seconds=${1:-30}
-launcher=()
-if command -v ccache >/dev/null; then
-  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-fi
+source scripts/ccache-options.sh
 # Line tables only: a report's stack still names files and lines, and the
 # build does not write full debug information it never reads.
 CC=clang CXX=clang++ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPROBELIGHT_FUZZ=ON \
-  -DPROBELIGHT_BUILD_BENCH=ON "${launcher[@]}" \
+  -DPROBELIGHT_BUILD_BENCH=ON "${ccache_cmake_args[@]}" \
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" \
   "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG"
 cmake --build build-asan -j"${SANITIZER_BUILD_JOBS:-$(nproc)}"

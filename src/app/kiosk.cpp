@@ -17,6 +17,7 @@
 #include "app/service_notify.hpp"
 #include "app/shutdown_request.hpp"
 #include "capture/frame_recorder.hpp"
+#include "capture/frame_recording.hpp"
 #include "capture/image_frame_source.hpp"
 #include "capture/libcamera_source.hpp"
 #include "capture/recording_frame_source.hpp"
@@ -394,6 +395,7 @@ class Kiosk {
       source_ = std::make_unique<ImageFrameSource>(options_.images);
     } else if (options_.source == "recording") {
       source_ = std::make_unique<RecordingFrameSource>(options_.recording_dir);
+      PROBELIGHT_TRY(makeReplayedWorld());
     } else if (options_.source == "libcamera") {
       LibcameraSettings camera;
       camera.camera_id = settings.camera.id;
@@ -434,31 +436,83 @@ class Kiosk {
     return "";
   }
 
+  // The simulated world's settings from probelight.yaml's sim section, as a
+  // recording keeps them.
+  static RecordedSimulation simulationOf(const SimConfig& sim) {
+    RecordedSimulation simulation;
+    simulation.environment = sim.env;
+    simulation.camera_path = sim.camera_path;
+    simulation.noise_sigma_code = sim.noise_sigma;
+    simulation.lens_blur_sigma_px = sim.lens_blur_sigma;
+    simulation.seed = static_cast<std::uint64_t>(sim.seed);
+    simulation.sun_azimuth_rate_deg_per_frame = sim.sun_azimuth_rate_deg_per_frame;
+    simulation.environment_rotation_deg = sim.environment_rotation_deg;
+    simulation.lamp_on_frame = sim.lamp_on_frame;
+    simulation.lamp_off_frame = sim.lamp_off_frame;
+    for (int i = 0; i < 3; ++i) simulation.ball_offset_m[i] = sim.ball_offset_m[i];
+    return simulation;
+  }
+
+  // `scene` (its camera and rig set: what the pipeline is told) given the
+  // world of `simulation`, the ball where sim.ball_offset puts it.
+  static void applySimulation(const RecordedSimulation& simulation, sim::SceneConfig& scene) {
+    scene.environment = simulation.environment;
+    scene.camera_path.name = simulation.camera_path;
+    scene.noise_sigma_code = simulation.noise_sigma_code;
+    scene.lens_blur_sigma_px = simulation.lens_blur_sigma_px;
+    scene.seed = simulation.seed;
+    scene.lighting.sun_azimuth_rate_deg_per_frame = simulation.sun_azimuth_rate_deg_per_frame;
+    scene.environment_rotation_deg = simulation.environment_rotation_deg;
+    scene.lighting.lamp_on_frame = simulation.lamp_on_frame;
+    scene.lighting.lamp_off_frame = simulation.lamp_off_frame;
+    scene.rig.probe_center_w +=
+        glm::dvec3(simulation.ball_offset_m[0], simulation.ball_offset_m[1], simulation.ball_offset_m[2]);
+  }
+
+  // A replayed recording of the simulated camera: its world rebuilt from
+  // recording.json and the recording's own camera.yaml and rig.yaml, for
+  // the truth alone (no frame is rendered), so that the replay's report
+  // measures the pipeline as the live run's did. A camera's recording has
+  // no simulation, and a bad recording.json is the source's to say.
+  Status makeReplayedWorld() {
+    RecordingHeader header;
+    if (!readRecordingHeader(options_.recording_dir, header).isOk() || !header.simulation) return Status::ok();
+    const fs::path dir = options_.recording_dir;
+    sim::SceneConfig scene = sim::defaultScene();
+    try {
+      scene.camera = config::loadCameraFile((dir / "camera.yaml").string());
+      scene.rig = config::loadRigFile((dir / "rig.yaml").string());
+    } catch (const config::ConfigError& error) {
+      return Status::badInput(error.what());
+    }
+    applySimulation(*header.simulation, scene);
+    try {
+      world_ = std::make_shared<const sim::World>(scene);
+    } catch (const sim::SceneError& error) {
+      return Status::badInput((dir / kRecordingHeaderFile).string() + ": field 'simulation': " + error.what());
+    }
+    simulation_ = header.simulation;
+    return Status::ok();
+  }
+
   Status makeSimulatedCamera() {
     const AppSettings& settings = inputs_.settings;
     sim::SceneConfig scene = sim::defaultScene();
-    scene.environment = settings.sim.env;
-    scene.camera_path.name = settings.sim.camera_path;
-    scene.noise_sigma_code = settings.sim.noise_sigma;
-    scene.lens_blur_sigma_px = settings.sim.lens_blur_sigma;
-    scene.seed = static_cast<std::uint64_t>(settings.sim.seed);
-    scene.lighting.sun_azimuth_rate_deg_per_frame = settings.sim.sun_azimuth_rate_deg_per_frame;
-    scene.environment_rotation_deg = settings.sim.environment_rotation_deg;
-    scene.lighting.lamp_on_frame = settings.sim.lamp_on_frame;
-    scene.lighting.lamp_off_frame = settings.sim.lamp_off_frame;
     if (inputs_.camera_from_file) scene.camera = inputs_.camera;
     if (inputs_.rig_from_file) scene.rig = inputs_.rig;
     // The simulated camera and rig are what the pipeline is told: a perfect
-    // calibration, so that the errors measured are the pipeline's own...
+    // calibration, so that the errors measured are the pipeline's own
+    // (unless sim.ball_offset says the real ball is elsewhere).
     inputs_.camera = scene.camera;
     inputs_.rig = scene.rig;
-    // ...unless sim.ball_offset says the real ball is elsewhere.
-    scene.rig.probe_center_w += settings.sim.ball_offset_m;
+    const RecordedSimulation simulation = simulationOf(settings.sim);
+    applySimulation(simulation, scene);
     try {
       world_ = std::make_shared<const sim::World>(scene);
     } catch (const sim::SceneError& error) {
       return Status::badInput(simulatorInputName(error.what()) + error.what());
     }
+    simulation_ = simulation;
     SimCameraOptions camera_options;
     camera_options.layout = PixelLayout::kRgb8;
     for (const CameraFormatInfo& format : cameraFormats())
@@ -582,6 +636,7 @@ class Kiosk {
     header.stream = source_->streamDescription();
     header.exposure_control = source_->takesExposureLadders();
     header.shortest_exposure_us = source_->shortestExposureUs();
+    header.simulation = simulation_;
     recorder_ = std::make_unique<FrameRecorder>(options_.record_dir);
     if (std::string error; !recorder_->begin(header, error)) return Status::runtimeFailure(error + " (--record)");
     return Status::ok();
@@ -659,7 +714,9 @@ class Kiosk {
   RunReport report_;
 
   // The seams.
-  std::shared_ptr<const sim::World> world_;  // only with --source sim: the truth
+  // Only with --source sim, or a recording of it replayed: the truth.
+  std::shared_ptr<const sim::World> world_;
+  std::optional<RecordedSimulation> simulation_;  // world_'s settings, for --record
   std::unique_ptr<FrameSource> source_;
   std::unique_ptr<CameraLink> camera_;
   std::unique_ptr<Display> display_;  // owns the GL context: declared before the stages' GL objects

@@ -51,9 +51,9 @@ const Json& member(const Json& object, const char* key, const std::string& prefi
   return *found;
 }
 
-double number(const Json& object, const char* key, double low, double high) {
-  const std::string field = key;
-  const Json& value = member(object, key);
+double number(const Json& object, const char* key, double low, double high, const std::string& prefix = "") {
+  const std::string field = prefix + key;
+  const Json& value = member(object, key, prefix);
   if (!value.is_number()) throw FieldError(field, "not a number");
   const double x = value.get<double>();
   if (!std::isfinite(x) || x < low || x > high)
@@ -80,6 +80,106 @@ const std::string& text(const Json& object, const char* key, const std::string& 
   const Json& value = member(object, key, prefix);
   if (!value.is_string()) throw FieldError(field, "not a string");
   return value.get_ref<const std::string&>();
+}
+
+// `count` numbers in [low, high] in the list `key` of `object`.
+std::vector<double> numberList(const Json& object, const char* key, std::size_t count, double low, double high,
+                               const std::string& prefix) {
+  const std::string field = prefix + key;
+  const Json& value = member(object, key, prefix);
+  if (!value.is_array() || value.size() != count)
+    throw FieldError(field, "not a list of " + std::to_string(count) + " numbers");
+  std::vector<double> out;
+  for (const Json& item : value) {
+    if (!item.is_number()) throw FieldError(field, "holds " + item.dump() + ", not a number");
+    const double x = item.get<double>();
+    if (!std::isfinite(x) || x < low || x > high)
+      throw FieldError(field, item.dump() + " is outside [" + Json(low).dump() + ", " + Json(high).dump() + "]");
+    out.push_back(x);
+  }
+  return out;
+}
+
+bool boolean(const Json& object, const char* key, const std::string& prefix = "") {
+  const Json& value = member(object, key, prefix);
+  if (!value.is_boolean()) throw FieldError(prefix + key, "not true or false");
+  return value.get<bool>();
+}
+
+// Far beyond any frame or scene: a damaged number, not a simulator's.
+constexpr double kMaxTruthPx = 1e6;
+constexpr double kMaxTruthMetres = 1e3;
+
+Json truthJson(const FrameTruth& truth) {
+  Json rotation = Json::array();
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) rotation.push_back(truth.pose.R_cam_from_world[col][row]);
+  const glm::dvec3& t = truth.pose.t_cam_from_world;
+  return {{"R_cam_from_world", rotation},  // row by row
+          {"t_cam_from_world_m", {t.x, t.y, t.z}},
+          {"probe_center_px", {truth.probe_center_px.x, truth.probe_center_px.y}},
+          {"probe_radius_px", truth.probe_radius_px},
+          {"exposure", truth.exposure},
+          {"tag_fully_visible", truth.tag_fully_visible},
+          {"probe_fully_visible", truth.probe_fully_visible}};
+}
+
+FrameTruth readTruth(const Json& json) {
+  if (!json.is_object()) throw FieldError("truth", "not an object");
+  const std::string prefix = "truth.";
+  FrameTruth truth;
+  const std::vector<double> rotation = numberList(json, "R_cam_from_world", 9, -1.0 - 1e-9, 1.0 + 1e-9, prefix);
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) truth.pose.R_cam_from_world[col][row] = rotation[3 * row + col];
+  // A rotation: its columns orthonormal within what 17 written digits keep.
+  const glm::dmat3 product = glm::transpose(truth.pose.R_cam_from_world) * truth.pose.R_cam_from_world;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (std::abs(product[i][j] - (i == j ? 1.0 : 0.0)) > 1e-9)
+        throw FieldError("truth.R_cam_from_world", "not a rotation (R^T R is not the identity)");
+  const std::vector<double> t = numberList(json, "t_cam_from_world_m", 3, -kMaxTruthMetres, kMaxTruthMetres, prefix);
+  truth.pose.t_cam_from_world = glm::dvec3(t[0], t[1], t[2]);
+  const std::vector<double> center = numberList(json, "probe_center_px", 2, -kMaxTruthPx, kMaxTruthPx, prefix);
+  truth.probe_center_px = glm::dvec2(center[0], center[1]);
+  truth.probe_radius_px = number(json, "probe_radius_px", 0.0, kMaxTruthPx, prefix);
+  truth.exposure = number(json, "exposure", 0.0, kMaxTruthPx, prefix);
+  truth.tag_fully_visible = boolean(json, "tag_fully_visible", prefix);
+  truth.probe_fully_visible = boolean(json, "probe_fully_visible", prefix);
+  return truth;
+}
+
+Json simulationJson(const RecordedSimulation& simulation) {
+  return {{"environment", simulation.environment},
+          {"camera_path", simulation.camera_path},
+          {"noise_sigma_code", simulation.noise_sigma_code},
+          {"lens_blur_sigma_px", simulation.lens_blur_sigma_px},
+          {"seed", simulation.seed},
+          {"sun_azimuth_rate_deg_per_frame", simulation.sun_azimuth_rate_deg_per_frame},
+          {"environment_rotation_deg", simulation.environment_rotation_deg},
+          {"lamp_on_frame", simulation.lamp_on_frame},
+          {"lamp_off_frame", simulation.lamp_off_frame},
+          {"ball_offset_m", {simulation.ball_offset_m[0], simulation.ball_offset_m[1], simulation.ball_offset_m[2]}}};
+}
+
+// The ranges are wide (the simulator checks its scene itself when the
+// replay builds it); what is refused here is a damaged number.
+RecordedSimulation readSimulation(const Json& json) {
+  if (!json.is_object()) throw FieldError("simulation", "not an object");
+  const std::string prefix = "simulation.";
+  constexpr double kFrames = 1e15;
+  RecordedSimulation simulation;
+  simulation.environment = text(json, "environment", prefix);
+  simulation.camera_path = text(json, "camera_path", prefix);
+  simulation.noise_sigma_code = number(json, "noise_sigma_code", 0.0, 255.0, prefix);
+  simulation.lens_blur_sigma_px = number(json, "lens_blur_sigma_px", 0.0, 1000.0, prefix);
+  simulation.seed = static_cast<std::uint64_t>(integer(json, "seed", 0, std::numeric_limits<long long>::max(), prefix));
+  simulation.sun_azimuth_rate_deg_per_frame = number(json, "sun_azimuth_rate_deg_per_frame", -360.0, 360.0, prefix);
+  simulation.environment_rotation_deg = number(json, "environment_rotation_deg", -1e6, 1e6, prefix);
+  simulation.lamp_on_frame = integer(json, "lamp_on_frame", -1, static_cast<long long>(kFrames), prefix);
+  simulation.lamp_off_frame = integer(json, "lamp_off_frame", -1, static_cast<long long>(kFrames), prefix);
+  const std::vector<double> offset = numberList(json, "ball_offset_m", 3, -kMaxTruthMetres, kMaxTruthMetres, prefix);
+  for (int i = 0; i < 3; ++i) simulation.ball_offset_m[i] = offset[static_cast<std::size_t>(i)];
+  return simulation;
 }
 
 // Parses a small JSON file; a syntax error or a file that is not an object
@@ -159,7 +259,6 @@ RecordedFrame copyFrameForRecording(const FrameBuffer& frame) {
   out.height_px = frame.height_px;
   out.encoding = frame.planes.encoding;
   out.metadata = frame.metadata;
-  out.metadata.truth.reset();
   out.plane_count = planeCount(frame.layout);
   if (frame.layout == PixelLayout::kRgb8) {
     out.stride_bytes[0] = 3 * frame.width_px;
@@ -199,6 +298,7 @@ bool writeRecordingHeader(const std::string& dir, const RecordingHeader& header,
                {"camera", "camera.yaml"},
                {"rig", "rig.yaml"}};
   if (header.shortest_exposure_us) json["shortest_exposure_us"] = *header.shortest_exposure_us;
+  if (header.simulation) json["simulation"] = simulationJson(*header.simulation);
   return writeFileWhole(fs::path(dir) / kRecordingHeaderFile, json.dump(2) + "\n", error);
 }
 
@@ -221,6 +321,7 @@ bool writeRecordedFrame(const std::string& dir, const std::string& stem, const R
                {"red_gain", frame.metadata.red_gain},
                {"blue_gain", frame.metadata.blue_gain},
                {"origin", frame.metadata.origin}};
+  if (frame.metadata.truth) json["truth"] = truthJson(*frame.metadata.truth);
   if (isYuv(frame.layout))
     json["ycbcr"] = {{"matrix", matrixName(frame.encoding.matrix)}, {"range", frame.encoding.full_range ? "full" : "limited"}};
   return writeFileWhole(fs::path(dir) / (stem + ".json"), json.dump(2) + "\n", error);
@@ -243,6 +344,7 @@ Status readRecordingHeader(const std::string& dir, RecordingHeader& header) {
     read.exposure_control = control.get<bool>();
     if (json.contains("shortest_exposure_us"))
       read.shortest_exposure_us = number(json, "shortest_exposure_us", 0.0, kMaxExposureUs);
+    if (json.contains("simulation")) read.simulation = readSimulation(json["simulation"]);
     header = std::move(read);
   } catch (const std::exception& error) {
     return Status::badInput(path + ": " + error.what());
@@ -325,6 +427,8 @@ Status readRecordedFrame(const std::string& path, FrameBuffer& frame) {
     // The white balance's gains (recordings before them say none: 0, unknown).
     const double red_gain = json.contains("red_gain") ? number(json, "red_gain", 0.0, kMaxColourGain) : 0.0;
     const double blue_gain = json.contains("blue_gain") ? number(json, "blue_gain", 0.0, kMaxColourGain) : 0.0;
+    std::optional<FrameTruth> truth;
+    if (json.contains("truth")) truth = readTruth(json["truth"]);
     raw_name = text(json, "raw");
     if (raw_name.empty() || raw_name.find('/') != std::string::npos || raw_name == "." || raw_name == "..")
       throw FieldError("raw", "not a file name in the recording's folder");
@@ -344,6 +448,7 @@ Status readRecordedFrame(const std::string& path, FrameBuffer& frame) {
     frame.metadata.red_gain = red_gain;
     frame.metadata.blue_gain = blue_gain;
     frame.metadata.origin = json_path.string();
+    frame.metadata.truth = truth;
     frame.width_px = width;
     frame.height_px = height;
     frame.layout = *layout;

@@ -15,6 +15,12 @@
 // camera dropped). Each frame is two small files rather than one big one so
 // that a recording cut short (power, a full disk) keeps every frame written.
 //
+// A recording of the simulated camera also keeps what the simulator knows:
+// each frame's truth (its "truth" object: pose, ball outline, exposure) and,
+// in recording.json, the simulated world's settings ("simulation"), so that
+// a replay measures the pipeline against the same truth as the live run
+// without rendering a frame (the tests render a scene once and replay it).
+//
 // Every field is checked on reading: a bad file is one line naming the file
 // and the field (Status::badInput).
 #pragma once
@@ -32,11 +38,28 @@ namespace probelight {
 inline constexpr int kRecordingVersion = 1;
 inline constexpr const char* kRecordingHeaderFile = "recording.json";
 
+// The simulated world a recording was rendered from: what sim::World needs
+// besides the camera and rig (the recording's camera.yaml and rig.yaml), so
+// that a replay rebuilds it for the truth.
+struct RecordedSimulation {
+  std::string environment;
+  std::string camera_path;
+  double noise_sigma_code = 0.0;
+  double lens_blur_sigma_px = 0.0;
+  std::uint64_t seed = 0;
+  double sun_azimuth_rate_deg_per_frame = 0.0;
+  double environment_rotation_deg = 0.0;
+  std::int64_t lamp_on_frame = -1;
+  std::int64_t lamp_off_frame = -1;
+  double ball_offset_m[3] = {0.0, 0.0, 0.0};  // the real ball's offset from rig.yaml's (sim.ball_offset)
+};
+
 struct RecordingHeader {
   std::string source;            // FrameSource::name() of the camera recorded
   std::string stream;            // FrameSource::streamDescription(), may be empty
   bool exposure_control = false;  // the camera took exposure requests (a bracket can be replayed)
   std::optional<double> shortest_exposure_us;  // the sensor's, where it said
+  std::optional<RecordedSimulation> simulation;  // a simulated camera's world
 };
 
 // A frame's bytes and metadata, copied out of the camera's buffer so that the
@@ -50,7 +73,7 @@ struct RecordedFrame {
   int stride_bytes[3] = {0, 0, 0};
   std::size_t plane_bytes[3] = {0, 0, 0};
   std::vector<std::uint8_t> bytes;  // the planes, one after another
-  FrameMetadata metadata;           // truth is not recorded: a camera has none
+  FrameMetadata metadata;           // truth too, where the simulator knew it (a camera has none)
 };
 
 // Rows of plane `plane` of a frame `height_px` high, and the bytes of pixels

@@ -1,7 +1,9 @@
 // The kiosk's probe over views (environment_maps.merge_views) through the
 // real binary on the simulated camera, against the simulator's own truth:
 // a lamp switched on shows at once, a still room stops remaking its maps,
-// and a moving camera fills what one view hides behind its ball.
+// and a moving camera fills what one view hides behind its ball. Each scene
+// is rendered once: its variants (a single view, maps never remade) replay
+// its recording, truth included.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -24,15 +26,39 @@ class ProbeMergeRun : public testing::BinaryTest {
  protected:
   ProbeMergeRun() : BinaryTest("probe_merge_run") {}
 
-  // One run with `yaml` as its config; its report.
+  // One run with `yaml` as its config; its report. The simulator renders
+  // it, and records it into DIR/<name>.rec for replayWith.
   nlohmann::json runWith(const std::string& name, const std::string& yaml, const std::string& flags) {
     const fs::path config = dir_ / (name + ".yaml");
     std::ofstream(config) << yaml;
     const fs::path out = dir_ / name;
-    const CommandResult result =
-        run("run --save-every 0 " + flags + " --config " + config.string() + " --out " + out.string());
+    const CommandResult result = run("run --save-every 0 " + flags + " --config " + config.string() + " --out " +
+                                     out.string() + " --record " + (dir_ / (name + ".rec")).string());
     EXPECT_EQ(result.exit_status, 0) << result.stderr_text;
     return readReport(out);
+  }
+
+  // The frames runWith(`recorded`) rendered, replayed with `yaml` as the
+  // config (the same world: only the pipeline's settings differ), its
+  // report measured against the same truth (the recording keeps it). The
+  // scene is rendered once for all its variants. A variant whose pipeline
+  // would ask the camera for other exposures than the recorded run did
+  // (another bracket) cannot be replayed: that fails here, saying so.
+  nlohmann::json replayWith(const std::string& name, const std::string& yaml, const std::string& recorded,
+                            const nlohmann::json& recorded_report) {
+    const fs::path config = dir_ / (name + ".yaml");
+    std::ofstream(config) << yaml;
+    const fs::path out = dir_ / name;
+    const CommandResult result = run("run --save-every 0 --source recording --recording " +
+                                     (dir_ / (recorded + ".rec")).string() + " --frames 0 --config " +
+                                     config.string() + " --out " + out.string());
+    EXPECT_EQ(result.exit_status, 0) << result.stderr_text;
+    const nlohmann::json report = readReport(out);
+    EXPECT_EQ(report["frames"], recorded_report["frames"]) << name;
+    EXPECT_EQ(report["counters"].value("frames_in_bracket", 0), recorded_report["counters"].value("frames_in_bracket", 0))
+        << name << ": its pipeline bracketed other frames than " << recorded << "'s: render it live";
+    EXPECT_TRUE(report["map_updates"].contains("truth_checks")) << name << ": the replay lost the truth";
+    return report;
   }
 };
 
@@ -64,11 +90,11 @@ TEST_F(ProbeMergeRun, ALampSwitchedOnShowsInItsFirstFrame) {
   const std::string lamp = "sim:\n  lamp_on_frame: 40\n  exposure_control: false\n";
   const nlohmann::json merged = runWith("merged", lamp, "--frames 51 --path static");
   const nlohmann::json single =
-      runWith("single", lamp + "environment_maps:\n  merge_views: false\n", "--frames 51 --path static");
+      replayWith("single", lamp + "environment_maps:\n  merge_views: false\n", "merged", merged);
   // Control: maps never remade after the first show how far the lamp moves
   // the light (else the test would prove nothing).
-  const nlohmann::json frozen = runWith(
-      "frozen", lamp + "map_updates:\n  change_threshold_code: 255\n  max_age_frames: 100000\n", "--frames 51 --path static");
+  const nlohmann::json frozen = replayWith(
+      "frozen", lamp + "map_updates:\n  change_threshold_code: 255\n  max_age_frames: 100000\n", "merged", merged);
   const double lamp_effect = errorAt(frozen, 40, kDiffuseVsClipped) - errorAt(frozen, 30, kDiffuseVsClipped);
   ASSERT_GT(lamp_effect, 0.1) << "the lamp did not change the light";
   // On the lamp's first frame, what is left of its effect is at most a
@@ -96,7 +122,7 @@ TEST_F(ProbeMergeRun, AStillRoomStopsRemakingTheMapsOnceTheProbeHasSettled) {
   const std::string every_frame = "map_updates:\n  max_age_frames: 1\n";
   const nlohmann::json report = runWith("still", every_frame, "--frames 40 --path static");
   const nlohmann::json single =
-      runWith("single", every_frame + "environment_maps:\n  merge_views: false\n", "--frames 40 --path static");
+      replayWith("single", every_frame + "environment_maps:\n  merge_views: false\n", "still", report);
   const nlohmann::json& probe = report["probe_merge"];
   ASSERT_GE(probe["views"].get<long>(), 30) << "max_age_frames 1 remakes the reflection map every frame";
   EXPECT_EQ(probe["brackets"], 1) << probe.dump();
@@ -124,8 +150,8 @@ TEST_F(ProbeMergeRun, AStillRoomStopsRemakingTheMapsOnceTheProbeHasSettled) {
 // Half a point is the spread of the single view's frame-to-frame error.
 TEST_F(ProbeMergeRun, AMovingCameraKeepsWhatTheBracketMeasured) {
   const nlohmann::json report = runWith("moving", "sim:\n  env: studio\n", "--frames 90 --path slow_wobble");
-  const nlohmann::json single = runWith("moving_single", "sim:\n  env: studio\nenvironment_maps:\n  merge_views: false\n",
-                                        "--frames 90 --path slow_wobble");
+  const nlohmann::json single =
+      replayWith("moving_single", "sim:\n  env: studio\nenvironment_maps:\n  merge_views: false\n", "moving", report);
   EXPECT_EQ(report["probe_merge"]["brackets"], 1) << report["probe_merge"].dump();
   const double after_fit = errorAt(report, 20, kLitVsHdr);
   for (int frame : {40, 50, 60, 70, 80}) {
@@ -153,8 +179,8 @@ TEST_F(ProbeMergeRun, AHandHeldSweepKeepsTheSunItsBracketMeasured) {
   const std::string sunrise = "sim:\n  env: sunrise\n  environment_rotation_deg: 210\n";
   const nlohmann::json sweep = runWith("sweep", sunrise, "--frames 200 --path hand_held_sweep");
   const nlohmann::json still = runWith("still", sunrise, "--frames 30 --path static");
-  const nlohmann::json single = runWith("sweep_single", sunrise + "environment_maps:\n  merge_views: false\n",
-                                        "--frames 200 --path hand_held_sweep");
+  const nlohmann::json single =
+      replayWith("sweep_single", sunrise + "environment_maps:\n  merge_views: false\n", "sweep", sweep);
   int moved_frames = 0;
   for (const nlohmann::json& frame : sweep["hdr"]["frames"])
     if (frame.value("pose", "").find("the camera's motion puts it at") != std::string::npos) ++moved_frames;

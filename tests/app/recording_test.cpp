@@ -170,6 +170,47 @@ TEST_F(Recording, AnalyzeTakesARecordedFrameAndItsBracketByTheirMetadata) {
   EXPECT_LE(error, 0.05);
 }
 
+// A recording of the simulated camera keeps the simulator's truth, so a
+// replay is measured as the live run was (the tests render a scene once and
+// replay it for each variant: probe_merge_run_test.cpp): the same pose and
+// map errors, to the bit. And the replay depends on the recorded frames:
+// one frame blacked out is one frame without the tag, and the maps made
+// after it differ.
+TEST_F(Recording, ASimulatedRunReplaysWithItsTruthAndFollowsItsFrames) {
+  const fs::path config = dir_ / "still.yaml";
+  std::ofstream(config) << "sim:\n  env: sun_sky\n  exposure_control: false\n";
+  const int frames = 31;
+  const fs::path recording = dir_ / "still.rec", live = dir_ / "live";
+  CommandResult result = run("run --frames " + std::to_string(frames) + " --path static --save-every 0 --config " +
+                             config.string() + " --out " + live.string() + " --record " + recording.string());
+  ASSERT_EQ(result.exit_status, 0) << result.stderr_text;
+  EXPECT_TRUE(readJson(recording / "recording.json").contains("simulation"));
+  EXPECT_TRUE(readJson(recording / "frame_000000.json").contains("truth"));
+  auto replay = [&](const fs::path& out) {
+    const CommandResult replayed = run("run --source recording --recording " + recording.string() +
+                                       " --frames 0 --save-every 0 --config " + config.string() + " --out " + out.string());
+    EXPECT_EQ(replayed.exit_status, 0) << replayed.stderr_text;
+    return readReport(out);
+  };
+  const nlohmann::json live_report = readReport(live);
+  const nlohmann::json replay_report = replay(dir_ / "replay");
+  ASSERT_TRUE(live_report["map_updates"].contains("truth_checks"));
+  ASSERT_EQ(live_report["map_updates"]["truth_checks"].size(), 4u);  // frames 0, 10, 20, 30
+  EXPECT_EQ(replay_report["map_updates"]["truth_checks"], live_report["map_updates"]["truth_checks"]);
+  ASSERT_TRUE(live_report["accuracy"].contains("pose_rotation_error_deg"));
+  EXPECT_EQ(replay_report["accuracy"], live_report["accuracy"]);
+  EXPECT_EQ(replay_report["tag_status"]["frames"]["found"], frames);
+
+  // Frame 15 blacked out: the replay loses the tag there, and follows the
+  // frames it is given (the truth checks after it are of other maps).
+  const fs::path raw = recording / "frame_000015.raw";
+  std::ofstream(raw, std::ios::binary | std::ios::trunc)
+      << std::string(static_cast<std::size_t>(fs::file_size(recording / "frame_000014.raw")), '\0');
+  const nlohmann::json damaged = replay(dir_ / "damaged");
+  EXPECT_EQ(damaged["tag_status"]["frames"]["found"], frames - 1);
+  EXPECT_NE(damaged["accuracy"], live_report["accuracy"]);
+}
+
 TEST_F(Recording, BadRecordingsAndFlagsAreOneLineAndLoseNothing) {
   const fs::path recording = recordRun("yuv420", 6, "--save-every 0");
   const std::size_t files = std::distance(fs::directory_iterator(recording), fs::directory_iterator());

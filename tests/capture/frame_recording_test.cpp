@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
+#include <tuple>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -273,6 +275,116 @@ TEST_F(FrameRecording, ADamagedHeaderIsOneLineNamingTheField) {
     EXPECT_EQ(status.message().rfind(path + ": ", 0), 0u) << status.message();
     EXPECT_NE(status.message().find(expected), std::string::npos) << status.message();
   }
+}
+
+// A simulated camera's recording keeps the simulator's truth with each
+// frame and its world's settings in the header, exactly (17 significant
+// digits round-trip a double), so that a replay measures against the same
+// truth as the live run; damaged, each is one line naming the field.
+TEST_F(FrameRecording, TheSimulatorsTruthAndWorldComeBackExactly) {
+  const ImageRGB8 image = randomImage(16, 12, 5);
+  FrameBuffer frame;
+  encodeSimFrame(image, PixelLayout::kRgb8, frame);
+  FrameTruth truth;
+  const double angle = 0.7;  // a rotation about (1, 2, 2)/3 by 0.7 rad, built from its axis
+  const glm::dvec3 axis = glm::dvec3(1.0, 2.0, 2.0) / 3.0;
+  const glm::dmat3 cross(0.0, axis.z, -axis.y, -axis.z, 0.0, axis.x, axis.y, -axis.x, 0.0);
+  truth.pose.R_cam_from_world = glm::dmat3(1.0) + std::sin(angle) * cross + (1.0 - std::cos(angle)) * cross * cross;
+  truth.pose.t_cam_from_world = {0.0123456789012345, -0.1, 0.61};
+  truth.probe_center_px = {301.25, 199.0 / 3.0};
+  truth.probe_radius_px = 29.875;
+  truth.exposure = 0.3;
+  truth.tag_fully_visible = true;
+  truth.probe_fully_visible = false;
+  frame.metadata.truth = truth;
+  std::string error;
+  ASSERT_TRUE(writeRecordedFrame(dir_.string(), recordedFrameStem(0), copyFrameForRecording(frame), error)) << error;
+  const std::string path = (dir_ / "frame_000000.json").string();
+  FrameBuffer read;
+  Status status = readRecordedFrame(path, read);
+  ASSERT_TRUE(status.isOk()) << status.message();
+  ASSERT_TRUE(read.metadata.truth.has_value());
+  const FrameTruth& got = *read.metadata.truth;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) EXPECT_EQ(got.pose.R_cam_from_world[c][r], truth.pose.R_cam_from_world[c][r]);
+  EXPECT_EQ(got.pose.t_cam_from_world, truth.pose.t_cam_from_world);
+  EXPECT_EQ(got.probe_center_px, truth.probe_center_px);
+  EXPECT_EQ(got.probe_radius_px, truth.probe_radius_px);
+  EXPECT_EQ(got.exposure, truth.exposure);
+  EXPECT_TRUE(got.tag_fully_visible);
+  EXPECT_FALSE(got.probe_fully_visible);
+
+  // A camera's frame has none.
+  frame.metadata.truth.reset();
+  ASSERT_TRUE(writeRecordedFrame(dir_.string(), recordedFrameStem(1), copyFrameForRecording(frame), error)) << error;
+  status = readRecordedFrame((dir_ / "frame_000001.json").string(), read);
+  ASSERT_TRUE(status.isOk()) << status.message();
+  EXPECT_FALSE(read.metadata.truth.has_value());
+
+  const nlohmann::json good = readJson(path);
+  for (const auto& [what, damage, expected] :
+       std::vector<std::tuple<std::string, std::function<void(nlohmann::json&)>, std::string>>{
+           {"not an object", [](nlohmann::json& j) { j["truth"] = 3; }, "field 'truth': not an object"},
+           {"a scaled rotation", [](nlohmann::json& j) { j["truth"]["R_cam_from_world"][0] = 0.5; },
+            "field 'truth.R_cam_from_world': not a rotation"},
+           {"eight entries", [](nlohmann::json& j) { j["truth"]["R_cam_from_world"].erase(8); },
+            "field 'truth.R_cam_from_world': not a list of 9 numbers"},
+           {"a NaN-like entry", [](nlohmann::json& j) { j["truth"]["t_cam_from_world_m"][1] = nullptr; },
+            "field 'truth.t_cam_from_world_m': holds null, not a number"},
+           {"a negative radius", [](nlohmann::json& j) { j["truth"]["probe_radius_px"] = -1.0; },
+            "field 'truth.probe_radius_px': -1.0 is outside"},
+           {"no visibility", [](nlohmann::json& j) { j["truth"].erase("tag_fully_visible"); },
+            "field 'truth.tag_fully_visible': missing"}}) {
+    SCOPED_TRACE(what);
+    nlohmann::json damaged = good;
+    damage(damaged);
+    writeJson(path, damaged);
+    status = readRecordedFrame(path, read);
+    ASSERT_EQ(status.kind(), Status::Kind::kBadInput);
+    EXPECT_EQ(status.message().rfind(path + ": ", 0), 0u) << status.message();
+    EXPECT_NE(status.message().find(expected), std::string::npos) << status.message();
+    EXPECT_EQ(status.message().find('\n'), std::string::npos) << status.message();
+  }
+
+  RecordingHeader header;
+  header.source = "sim:studio";
+  RecordedSimulation simulation;
+  simulation.environment = "sun_sky";
+  simulation.camera_path = "static";
+  simulation.noise_sigma_code = 1.5;
+  simulation.lens_blur_sigma_px = 0.75;
+  simulation.seed = 7;
+  simulation.sun_azimuth_rate_deg_per_frame = 0.25;
+  simulation.environment_rotation_deg = -30.0;
+  simulation.lamp_on_frame = 40;
+  simulation.lamp_off_frame = -1;
+  simulation.ball_offset_m[0] = 0.004;
+  simulation.ball_offset_m[2] = -0.002;
+  header.simulation = simulation;
+  ASSERT_TRUE(writeRecordingHeader(dir_.string(), header, error)) << error;
+  RecordingHeader read_header;
+  status = readRecordingHeader(dir_.string(), read_header);
+  ASSERT_TRUE(status.isOk()) << status.message();
+  ASSERT_TRUE(read_header.simulation.has_value());
+  const RecordedSimulation& back = *read_header.simulation;
+  EXPECT_EQ(back.environment, "sun_sky");
+  EXPECT_EQ(back.camera_path, "static");
+  EXPECT_EQ(back.noise_sigma_code, 1.5);
+  EXPECT_EQ(back.lens_blur_sigma_px, 0.75);
+  EXPECT_EQ(back.seed, 7u);
+  EXPECT_EQ(back.sun_azimuth_rate_deg_per_frame, 0.25);
+  EXPECT_EQ(back.environment_rotation_deg, -30.0);
+  EXPECT_EQ(back.lamp_on_frame, 40);
+  EXPECT_EQ(back.lamp_off_frame, -1);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(back.ball_offset_m[i], simulation.ball_offset_m[i]);
+  const std::string header_path = (dir_ / kRecordingHeaderFile).string();
+  nlohmann::json damaged = readJson(header_path);
+  damaged["simulation"]["lamp_on_frame"] = -5;
+  writeJson(header_path, damaged);
+  status = readRecordingHeader(dir_.string(), read_header);
+  ASSERT_EQ(status.kind(), Status::Kind::kBadInput);
+  EXPECT_NE(status.message().find("field 'simulation.lamp_on_frame': -5 is outside"), std::string::npos)
+      << status.message();
 }
 
 }  // namespace
