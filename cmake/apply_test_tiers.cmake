@@ -23,19 +23,17 @@ endfunction()
 
 # probelight_tier(TIER SUITE FIXTURE...): the tests of these GoogleTest
 # fixtures (and their parameterised instances) in SUITE are in TIER.
-function(probelight_tier tier suite)
-  list(JOIN ARGN "|" fixtures)
-  math(EXPR n "${probelight_tier_rule_count} + 1")
-  set(probelight_tier_rule_count ${n} PARENT_SCOPE)
-  set(PROBELIGHT_TIER_RULE_${n}_TIER ${tier} PARENT_SCOPE)
-  set(PROBELIGHT_TIER_RULE_${n}_SUITE ${suite} PARENT_SCOPE)
-  set(PROBELIGHT_TIER_RULE_${n}_REGEX "^([A-Za-z0-9_]+/)?(${fixtures})\\." PARENT_SCOPE)
-  set(PROBELIGHT_TIER_RULE_${n}_TEXT "${tier} ${suite} ${ARGN}" PARENT_SCOPE)
-endfunction()
+macro(probelight_tier tier suite)
+  _probelight_tier_rule(FIXTURES ${tier} ${suite} ${ARGN})
+endmacro()
 
 # probelight_test_tier(TIER SUITE TEST...): these whole test names (without
 # a parameter suffix, which is matched as any) are in TIER; before fixtures.
-function(probelight_test_tier tier suite)
+macro(probelight_test_tier tier suite)
+  _probelight_tier_rule(TESTS ${tier} ${suite} ${ARGN})
+endmacro()
+
+function(_probelight_tier_rule kind tier suite)
   set(names)
   foreach(name IN LISTS ARGN)
     string(REPLACE "." "\\." name "${name}")
@@ -46,18 +44,23 @@ function(probelight_test_tier tier suite)
   set(probelight_tier_rule_count ${n} PARENT_SCOPE)
   set(PROBELIGHT_TIER_RULE_${n}_TIER ${tier} PARENT_SCOPE)
   set(PROBELIGHT_TIER_RULE_${n}_SUITE ${suite} PARENT_SCOPE)
-  set(PROBELIGHT_TIER_RULE_${n}_REGEX "^([A-Za-z0-9_]+/)?(${alternatives})(/.*)?$" PARENT_SCOPE)
   set(PROBELIGHT_TIER_RULE_${n}_TEXT "${tier} ${suite} ${ARGN}" PARENT_SCOPE)
-  set(PROBELIGHT_TIER_RULE_${n}_FIRST ON PARENT_SCOPE)
+  if(kind STREQUAL "TESTS")
+    set(PROBELIGHT_TIER_RULE_${n}_REGEX "^([A-Za-z0-9_]+/)?(${alternatives})(/.*)?$" PARENT_SCOPE)
+    set(PROBELIGHT_TIER_RULE_${n}_FIRST ON PARENT_SCOPE)
+  else()
+    set(PROBELIGHT_TIER_RULE_${n}_REGEX "^([A-Za-z0-9_]+/)?(${alternatives})\\." PARENT_SCOPE)
+  endif()
 endfunction()
 
-# probelight_slow_under_sanitizers(TEST_REGEX REASON): tests whose names
-# match are labelled slow_under_sanitizers, which scripts/test-sanitizers.sh
-# leaves to the release run.
-function(probelight_slow_under_sanitizers regex reason)
+# probelight_slow_under_sanitizers(SUITE TEST_REGEX REASON): SUITE's tests
+# whose names match are labelled slow_under_sanitizers, which
+# scripts/test-sanitizers.sh leaves to the release run.
+function(probelight_slow_under_sanitizers suite regex reason)
   math(EXPR n "${probelight_slow_rule_count} + 1")
   set(probelight_slow_rule_count ${n} PARENT_SCOPE)
   set(probelight_slow_rules ${probelight_slow_rules} ${n} PARENT_SCOPE)
+  set(PROBELIGHT_SLOW_RULE_${n}_SUITE ${suite} PARENT_SCOPE)
   set(PROBELIGHT_SLOW_RULE_${n}_REGEX "${regex}" PARENT_SCOPE)
 endfunction()
 
@@ -98,7 +101,7 @@ foreach(suite IN LISTS PROBELIGHT_TEST_SUITES)
     endif()
     set(labels ${tier} ${suite})
     foreach(n IN LISTS probelight_slow_rules)
-      if(test MATCHES "${PROBELIGHT_SLOW_RULE_${n}_REGEX}")
+      if(PROBELIGHT_SLOW_RULE_${n}_SUITE STREQUAL suite AND test MATCHES "${PROBELIGHT_SLOW_RULE_${n}_REGEX}")
         list(APPEND labels slow_under_sanitizers)
         list(APPEND probelight_rule_hits slow${n})
         break()

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The unit, gpu and end-to-end tiers again (tests/tiers.cmake), built by
-# clang with AddressSanitizer and UndefinedBehaviorSanitizer into
+# The tests again (tests/tiers.cmake: every unit, gpu and e2e test, and the
+# accuracy tier's checks of the product's code), built by clang with
+# AddressSanitizer and UndefinedBehaviorSanitizer into
 # ./build-asan, then each libFuzzer target (fuzz/) for a short run on its
 # corpus: scripts/fuzz.sh, on the same build. Any sanitizer report aborts
 # the process that met it, so its test or fuzz run fails. The benchmarks
@@ -12,12 +13,10 @@
 #        makes it beside the board VM, whose emulator keeps one core)
 #        SANITIZER_BUILD_JOBS=N   compile jobs (default the core count)
 #
-# Left out: the accuracy tier (numbers against path-traced truth, which the
-# release run checks; the code it runs is run here by the other tiers), the
-# vm tier (the package and the board VM's host side: no code of ours
-# beyond the binary's), and the tests labelled slow_under_sanitizers, each
-# with its reason and the shorter test that runs its code here, in
-# tests/tiers.cmake.
+# Left out: the vm tier (the package and the board VM's host side: no code
+# of ours beyond the binary's), and the tests labelled
+# slow_under_sanitizers, each with its reason and what runs its code here,
+# in tests/tiers.cmake.
 #
 # Leaks: the fuzz runs check them (LeakSanitizer, on every input; no GL in
 # those processes). The tests do not: Mesa's drivers are unloaded at exit,
@@ -38,7 +37,7 @@ cmake --build build-asan -j"${SANITIZER_BUILD_JOBS:-$(nproc)}"
 [[ ${SANITIZER_BUILD_ONLY:-0} == 1 ]] && exit 0
 source scripts/sanitizer-options.sh
 (cd build-asan && ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --output-on-failure -j"$(nproc)" --timeout 1800 \
-  -L '^(unit|gpu|e2e)$' -LE '^slow_under_sanitizers$')
+  -LE '^(vm|slow_under_sanitizers)$')
 if [[ $fuzz_seconds != 0 ]]; then
   scripts/fuzz.sh "$fuzz_seconds"
 fi
