@@ -29,6 +29,7 @@
 #include <glm/glm.hpp>
 
 #include "capture/sim_frame_source.hpp"
+#include "core/math_constants.hpp"
 #include "core/types.hpp"
 #include "core/ycbcr.hpp"
 #include "gles/capabilities.hpp"
@@ -68,7 +69,6 @@
 namespace probelight::bench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kRadToDeg = 180.0 / kPi;
 
 // Frames of the default orbit (-0.2 deg of azimuth per frame): 0, 12, 24 and

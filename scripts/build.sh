@@ -3,11 +3,13 @@
 # everything (the program, its tests and benchmarks), or only the targets
 # named (scripts/build.sh probelight). PROBELIGHT_BUILD_BENCH=OFF leaves the
 # benchmarks out (CI: scripts/test-sanitizers.sh compile-checks them).
-# Compiles through ccache where it is installed (scripts/ccache-options.sh).
+# Compiles through ccache where it is installed, and as a unity build with
+# PROBELIGHT_UNITY_BUILD=ON (CI): scripts/compile-options.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-source scripts/ccache-options.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPROBELIGHT_BUILD_BENCH="${PROBELIGHT_BUILD_BENCH:-ON}" "${ccache_cmake_args[@]}"
+source scripts/compile-options.sh
+generator_for build
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPROBELIGHT_BUILD_BENCH="${PROBELIGHT_BUILD_BENCH:-ON}" "${generator_args[@]}" "${compile_cmake_args[@]}"
 targets=()
 for target in "$@"; do targets+=(--target "$target"); done
 cmake --build build -j"$(nproc)" "${targets[@]}"

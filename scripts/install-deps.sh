@@ -6,8 +6,9 @@ set -euo pipefail
 packages=(
   # toolchain
   build-essential cmake pkg-config
-  # a compiler cache: a second build of the same sources (CI's next run) is mostly hits
-  ccache
+  # a compiler cache: a second build of the same sources (CI's next run) is mostly hits;
+  # Ninja: a new build folder's generator (scripts/compile-options.sh)
+  ccache ninja-build
   # vision: marker detection, calibration, image files (libdeflate: the fast PNG writer for frames)
   libapriltag-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev libdeflate-dev
   # maths and data; glTF 2.0 models (tinygltf)

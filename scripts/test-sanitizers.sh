@@ -26,11 +26,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 fuzz_seconds=${1:-30}
-source scripts/ccache-options.sh
+source scripts/compile-options.sh
+generator_for build-asan
 # Line tables only: a report's stack still names files and lines, and the
 # build does not write full debug information it never reads.
 CC=clang CXX=clang++ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPROBELIGHT_FUZZ=ON \
-  -DPROBELIGHT_BUILD_BENCH=ON "${ccache_cmake_args[@]}" \
+  -DPROBELIGHT_BUILD_BENCH=ON "${generator_args[@]}" "${compile_cmake_args[@]}" \
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" \
   "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG"
 cmake --build build-asan -j"${SANITIZER_BUILD_JOBS:-$(nproc)}"

@@ -1,12 +1,11 @@
 #include "ibl/environment_brdf.hpp"
+#include "core/math_constants.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 namespace probelight::ibl {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Van der Corput's radical inverse in base 2: the Hammersley set's second
 // coordinate.

@@ -1,4 +1,5 @@
 #include "ibl/ground_shadow.hpp"
+#include "core/math_constants.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,8 +9,6 @@
 namespace probelight::ibl {
 
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 bool finiteVector(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 

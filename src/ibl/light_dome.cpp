@@ -6,15 +6,13 @@
 #include <numbers>
 #include <queue>
 
+#include "core/finite_vector.hpp"
+#include "core/math_constants.hpp"
 #include "ibl/color_transfer.hpp"
 
 namespace probelight::ibl {
 
 namespace {
-
-constexpr double kPi = std::numbers::pi;
-
-bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 glm::dvec3 directionAt(double azimuth_rad, double elevation_rad) {
   return {std::cos(elevation_rad) * std::cos(azimuth_rad), std::cos(elevation_rad) * std::sin(azimuth_rad),
@@ -62,10 +60,10 @@ HemisphereGrid resample(const CubeMapRGB& cube, const std::vector<float>* validi
     const int y = std::clamp(static_cast<int>(coord.t * n), 0, n - 1);
     if (has_validity) valid = (*validity)[static_cast<std::size_t>(coord.face) * n * n + y * n + x] >= 0.5f;
     const glm::vec3 nearest = cube.texel(coord.face, x, y);
-    if (clip_level > 0.0 && finite(nearest))
+    if (clip_level > 0.0 && allFinite(nearest))
       clipped = std::max({nearest.r, nearest.g, nearest.b}) >= 0.98 * clip_level;
     const glm::vec3 value = cube.sampleBilinear(dir);
-    return finite(value) ? glm::max(glm::dvec3(value), glm::dvec3(0.0)) : glm::dvec3(0.0);
+    return allFinite(value) ? glm::max(glm::dvec3(value), glm::dvec3(0.0)) : glm::dvec3(0.0);
   };
   glm::dvec3 valid_sum(0.0);
   double valid_weight = 0.0;

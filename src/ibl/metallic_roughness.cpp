@@ -1,4 +1,5 @@
 #include "ibl/metallic_roughness.hpp"
+#include "core/math_constants.hpp"
 
 #include <algorithm>
 #include <array>
@@ -10,7 +11,6 @@ namespace probelight::ibl {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // The fit's angles from the axis: 1 to 89 degrees.
 constexpr int kFitAngles = 89;
 // Midpoint steps over the light's 90 degrees: the lobe of alpha 0.046 is

@@ -2,13 +2,12 @@
 
 #include <cmath>
 
+#include "core/finite_vector.hpp"
 #include "ibl/camera_projection.hpp"
 
 namespace probelight::ibl {
 
 namespace {
-
-bool isFinite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 }  // namespace
 
@@ -17,8 +16,8 @@ std::optional<glm::dvec2> reflectedDirectionToPixel(const MirrorBallView& view, 
   const glm::dvec3 camera_center_w = view.pose.cameraCenterWorld();
   // NaN fails every test below (a length < threshold, a dot <= 0), so a NaN
   // direction or pose would come out as a NaN pixel: no pixel instead.
-  if (!isFinite(reflected_w) || glm::length(reflected_w) == 0.0 || !isFinite(camera_center_w) ||
-      !isFinite(view.center_w) || !std::isfinite(view.radius_m))
+  if (!allFinite(reflected_w) || glm::length(reflected_w) == 0.0 || !allFinite(camera_center_w) ||
+      !allFinite(view.center_w) || !std::isfinite(view.radius_m))
     return std::nullopt;
   const glm::dvec3 r = glm::normalize(reflected_w);
   // In ball units (centre 0, radius 1) the surface point is the normal
@@ -78,7 +77,7 @@ std::optional<glm::dvec3> pixelToReflectedDirection(const MirrorBallView& view, 
   if (!(t_nearest > 0.0)) return std::nullopt;  // ball behind the camera, or camera inside it
   const glm::dvec3 normal = (origin_w + t_nearest * ray_w - view.center_w) / view.radius_m;
   const glm::dvec3 reflected = glm::normalize(ray_w - 2.0 * glm::dot(ray_w, normal) * normal);
-  if (!isFinite(reflected)) return std::nullopt;
+  if (!allFinite(reflected)) return std::nullopt;
   return reflected;
 }
 

@@ -8,12 +8,11 @@
 #include <optional>
 #include <sstream>
 
+#include "core/math_constants.hpp"
 #include "ibl/camera_projection.hpp"
 
 namespace probelight::ibl {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 // Nearest hit (t > 0) of origin + t dir with the vertical cylinder of
 // `radius` about axis_xy, between heights z_low and z_high.

@@ -1,4 +1,5 @@
 #include "ibl/probe_accumulator.hpp"
+#include "core/finite_vector.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,8 +15,6 @@ double lum(const glm::vec3& rgb) { return luminance(glm::dvec3(rgb)); }
 // sqrt(a^2 + b^2) without std::hypot's care for overflow (sigmas are far
 // from it) and its cost.
 double quadratureSum(double a, double b) { return std::sqrt(a * a + b * b); }
-
-bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // Texel (x, y) of `face`, or past its edge: the texel of the next face
 // that the extended face plane's direction falls in.
@@ -134,7 +133,7 @@ AccumulateCounts ProbeAccumulator::add(const ProbeObservation& view) {
   std::vector<float>& view_lum = view_luminance_;
   view_lum.resize(texels_.size());
   forEachSample([&](std::size_t i, const glm::vec3& value) {
-    view_lum[i] = view.confidence[i] > 0.0f && finite(value) ? static_cast<float>(lum(value)) : NAN;
+    view_lum[i] = view.confidence[i] > 0.0f && allFinite(value) ? static_cast<float>(lum(value)) : NAN;
   });
   auto seenByView = [&](std::size_t i) { return !std::isnan(view_lum[i]); };
   // Texels each way the view's direction uncertainty spans (may exceed
@@ -342,7 +341,7 @@ bool ProbeAccumulator::restore(const std::vector<glm::vec4>& texels, std::string
   long seen = 0;
   for (std::size_t i = 0; i < texels.size(); ++i) {
     const glm::vec4& t = texels[i];
-    if (!finite(glm::vec3(t)) || !std::isfinite(t.a) || t.r < 0.0f || t.g < 0.0f || t.b < 0.0f) {
+    if (!allFinite(glm::vec3(t)) || !std::isfinite(t.a) || t.r < 0.0f || t.g < 0.0f || t.b < 0.0f) {
       error = "texel " + std::to_string(i) + " is negative or not finite";
       return false;
     }

@@ -3,24 +3,23 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/finite_vector.hpp"
 #include "ibl/color_transfer.hpp"
 
 namespace probelight::ibl {
 
 namespace {
 
-bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
 }  // namespace
 
 std::optional<VirtualLampProblem> virtualLampProblem(const VirtualLamp& lamp) {
-  if (!finite(lamp.position_w)) return VirtualLampProblem{"position", "must be three finite numbers"};
+  if (!allFinite(lamp.position_w)) return VirtualLampProblem{"position", "must be three finite numbers"};
   if (!(lamp.position_w.z > 0.0)) return VirtualLampProblem{"position", "the lamp must be above the ground (z > 0)"};
-  if (!finite(lamp.colour) || lamp.colour.r < 0.0 || lamp.colour.g < 0.0 || lamp.colour.b < 0.0)
+  if (!allFinite(lamp.colour) || lamp.colour.r < 0.0 || lamp.colour.g < 0.0 || lamp.colour.b < 0.0)
     return VirtualLampProblem{"colour", "must be three finite numbers, none negative"};
   if (!std::isfinite(lamp.intensity) || lamp.intensity < 0.0)
     return VirtualLampProblem{"intensity", "must be a finite number, not negative"};
-  if (!finite(lamp.spot_direction_w) || !(glm::length(lamp.spot_direction_w) > 0.0))
+  if (!allFinite(lamp.spot_direction_w) || !(glm::length(lamp.spot_direction_w) > 0.0))
     return VirtualLampProblem{"spot_direction", "must be a direction, not zero"};
   if (!(lamp.spot_half_angle_deg > 0.0 && lamp.spot_half_angle_deg <= 180.0))
     return VirtualLampProblem{"spot_half_angle_deg", "must be in (0, 180]"};

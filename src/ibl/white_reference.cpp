@@ -6,13 +6,12 @@
 #include <numbers>
 #include <sstream>
 
+#include "core/math_constants.hpp"
 #include "ibl/camera_projection.hpp"
 #include "ibl/probe_outline.hpp"
 
 namespace probelight::ibl {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 }  // namespace
 

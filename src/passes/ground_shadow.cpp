@@ -1,4 +1,5 @@
 #include "passes/ground_shadow.hpp"
+#include "core/math_constants.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +11,6 @@ namespace probelight::passes {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 // How much bigger than the object's bounding sphere the light's frustum is:
 // PCF taps near the silhouette stay inside the map.
 constexpr double kFrustumMargin = 1.04;

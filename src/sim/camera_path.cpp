@@ -4,13 +4,11 @@
 #include <numbers>
 #include <random>
 
+#include "core/math_constants.hpp"
 #include "sim/scene_geometry.hpp"
 
 namespace probelight::sim {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
-double degToRad(double deg) { return deg * kPi / 180.0; }
 
 std::uint64_t mixSeed(std::uint64_t seed, std::uint64_t index) {
   std::uint64_t z = seed * 0x9E3779B97F4A7C15ull + index + 0x632BE59BD9B4E019ull;

@@ -10,14 +10,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/math_constants.hpp"
 #include "sim/scene_config.hpp"
 
 namespace probelight::sim {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
-
-double degToRad(double deg) { return deg * kPi / 180.0; }
 
 glm::dvec3 directionFromAzimuthElevation(double azimuth_rad, double elevation_rad) {
   return {std::cos(elevation_rad) * std::cos(azimuth_rad), std::cos(elevation_rad) * std::sin(azimuth_rad),

@@ -1,4 +1,5 @@
 #include "sim/gltf_brdf.hpp"
+#include "core/math_constants.hpp"
 
 #include <algorithm>
 #include <array>
@@ -8,7 +9,6 @@
 namespace probelight::sim {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kDielectricF0 = 0.04;  // ((1 - ior) / (1 + ior))^2 for ior 1.5
 
 // Into [0, 1]; NaN to 0, so a broken input cannot poison a whole frame.

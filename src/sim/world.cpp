@@ -13,6 +13,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "core/math_constants.hpp"
 #include "sim/camera_path.hpp"
 #include "sim/environment.hpp"
 #include "sim/gltf_brdf.hpp"
@@ -23,7 +24,6 @@
 namespace probelight::sim {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kAutoExposureWhiteAlbedo = 0.85;
 constexpr double kAutoExposureTargetLinear = 0.5;
 constexpr int kPostAzimuthSteps = 32;
@@ -35,8 +35,6 @@ constexpr int kPostAzimuthSteps = 32;
 constexpr int kGridWidth = 512;
 constexpr int kGridHeight = 256;
 constexpr int kGridSubsamples = 3;
-
-double degToRad(double deg) { return deg * kPi / 180.0; }
 
 double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
 

@@ -18,6 +18,9 @@
 
 namespace probelight::testing {
 
+// Rec. 709 luminance of linear RGB, the accuracy suites' measure.
+inline double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+
 // The default scene in `environment`, seen from a still camera at this
 // distance, elevation and azimuth (looking at the rig's default point).
 inline sim::SceneConfig staticView(const std::string& environment, double distance_m, double elevation_deg,

@@ -37,7 +37,7 @@
 namespace probelight {
 namespace {
 
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+using testing::luminance;
 
 // Evenly spread directions (Fibonacci sphere), each standing for the same
 // solid angle.
@@ -121,7 +121,7 @@ glm::dvec3 blind_w_of(const PoseCamFromWorld& pose, const glm::dvec3& probe_cent
   return glm::normalize(probe_center_w - pose.cameraCenterWorld());
 }
 
-struct ViewCase {
+struct BracketViewCase {
   const char* name;
   double distance_m, elevation_deg, azimuth_deg;
 };
@@ -130,7 +130,7 @@ TEST(HdrBracketAccuracy, IrradianceAndDominantLightAgainstTheHdrTruth) {
   const std::vector<std::string> environments = {
       "sun_sky", "overcast", "studio", std::string(PROBELIGHT_TEST_DATA_DIR) + "/env/KernerEnvLatLong.exr",
       std::string(PROBELIGHT_TEST_DATA_DIR) + "/env/StageEnvLatLong.exr"};
-  const ViewCase views[] = {{"near", 0.45, 45.0, -90.0}, {"far", 0.8, 30.0, -70.0}, {"side", 0.55, 38.0, 160.0}};
+  const BracketViewCase views[] = {{"near", 0.45, 45.0, -90.0}, {"far", 0.8, 30.0, -70.0}, {"side", 0.55, 38.0, 160.0}};
   const ibl::HdrMergeSettings merge;
   std::printf("\n| environment | view | bracket EVs | still clipped | irradiance vs HDR: bracket / white border / border + post / 8-bit | "
               "sphere shading: bracket / white border / border + post / 8-bit | dominant light: bracket / 8-bit | white border; post |\n"
@@ -139,7 +139,7 @@ TEST(HdrBracketAccuracy, IrradianceAndDominantLightAgainstTheHdrTruth) {
   double shading_sum[4] = {0.0, 0.0, 0.0, 0.0};
   int counted = 0, blind = 0;
   for (const std::string& environment : environments) {
-    for (const ViewCase& view : views) {
+    for (const BracketViewCase& view : views) {
       const sim::SceneConfig scene =
           testing::staticView(environment, view.distance_m, view.elevation_deg, view.azimuth_deg);
       const sim::World world(scene);

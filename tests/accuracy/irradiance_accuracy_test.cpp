@@ -33,7 +33,7 @@
 namespace probelight {
 namespace {
 
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+using testing::luminance;
 
 // The 14 normals of analysis.json: ±X, ±Y, ±Z and the 8 diagonals.
 std::vector<glm::dvec3> fourteenNormals() {
@@ -44,7 +44,7 @@ std::vector<glm::dvec3> fourteenNormals() {
   return normals;
 }
 
-struct ViewCase {
+struct IrradianceViewCase {
   const char* name;
   double distance_m;
   double elevation_deg;
@@ -76,7 +76,7 @@ TEST_F(IrradianceAccuracy, FourteenNormalsAcrossWorldsViewsAndFaceSizes) {
       std::string(PROBELIGHT_TEST_DATA_DIR) + "/env/KernerEnvLatLong.exr",
       std::string(PROBELIGHT_TEST_DATA_DIR) + "/env/StageEnvLatLong.exr"};
   // Near, far, and the ball pushed toward the frame's right edge.
-  const ViewCase views[] = {{"near 0.45 m", 0.45, 45.0, -90.0, {0, 0, 0}},
+  const IrradianceViewCase views[] = {{"near 0.45 m", 0.45, 45.0, -90.0, {0, 0, 0}},
                             {"far 0.8 m", 0.8, 30.0, -70.0, {0, 0, 0}},
                             {"ball off-centre", 0.55, 38.0, -110.0, {-0.09, 0.05, 0}}};
   const int face_sizes[] = {16, 32, 64, 128};
@@ -87,7 +87,7 @@ TEST_F(IrradianceAccuracy, FourteenNormalsAcrossWorldsViewsAndFaceSizes) {
   std::printf("\n| environment | view | ball radius px | cosine passes: mean / worst | SH9: mean / worst |\n"
               "|---|---|---|---|---|\n");
   for (const std::string& environment : environments) {
-    for (const ViewCase& view : views) {
+    for (const IrradianceViewCase& view : views) {
       sim::SceneConfig scene = sim::defaultScene();
       scene.environment = environment;
       scene.camera_path.name = "static";

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "accuracy_test_support.hpp"
 #include "ibl/light_dome.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
@@ -21,7 +22,7 @@
 namespace probelight {
 namespace {
 
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+using testing::luminance;
 
 TEST(LightDomeAccuracy, EightLightsHoldTheUpperIrradianceOfEveryWorld) {
   const std::string data = PROBELIGHT_TEST_DATA_DIR;

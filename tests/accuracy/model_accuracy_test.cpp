@@ -37,10 +37,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "accuracy_test_support.hpp"
 #include "app/analyze.hpp"
 #include "app/command_line.hpp"
 #include "config/camera_file.hpp"
 #include "config/rig_file.hpp"
+#include "core/math_constants.hpp"
 #include "ibl/camera_projection.hpp"
 #include "ibl/color_transfer.hpp"
 #include "model/generated_models.hpp"
@@ -57,11 +59,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kTile = 3;
 constexpr int kTruthClipCode = 250;
 
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+using testing::luminance;
 
 double linearLuminanceAt(const ImageRGB8& image, int x, int y) {
   const std::uint8_t* p = image.row(y) + 3 * x;

@@ -48,7 +48,7 @@
 namespace probelight {
 namespace {
 
-double luminance(const glm::dvec3& rgb) { return ibl::luminance(rgb); }
+using testing::luminance;
 
 glm::dvec3 fromAzimuthElevationDeg(double azimuth_deg, double elevation_deg) {
   const double a = glm::radians(azimuth_deg), e = glm::radians(elevation_deg);

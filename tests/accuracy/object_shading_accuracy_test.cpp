@@ -37,7 +37,7 @@
 namespace probelight {
 namespace {
 
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+using testing::luminance;
 
 glm::dvec3 linearAt(const ImageRGB8& image, int x, int y) {
   const std::uint8_t* p = image.row(y) + 3 * x;

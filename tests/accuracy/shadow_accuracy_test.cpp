@@ -41,7 +41,7 @@
 namespace probelight {
 namespace {
 
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
+using testing::luminance;
 
 struct Object {
   const char* name;

@@ -29,7 +29,7 @@ namespace fs = std::filesystem;
 
 const fs::path kChessboardDir = fs::path(PROBELIGHT_TEST_DATA_DIR) / "chessboard";
 
-struct CommandResult {
+struct CalibrateCameraResult {
   int exit_status = -1;
   std::string stdout_text, stderr_text;
 };
@@ -105,12 +105,12 @@ class CalibrateCamera : public ::testing::Test {
     if (!HasFailure()) fs::remove_all(dir_);
   }
 
-  CommandResult run(const std::string& args) const {
+  CalibrateCameraResult run(const std::string& args) const {
     const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
     const std::string command =
         std::string(PROBELIGHT_BINARY) + " calibrate-camera " + args + " >" + out.string() + " 2>" + err.string();
     const int status = std::system(command.c_str());
-    CommandResult result;
+    CalibrateCameraResult result;
     result.exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     result.stdout_text = readText(out);
     result.stderr_text = readText(err);
@@ -119,9 +119,9 @@ class CalibrateCamera : public ::testing::Test {
 
   // Calibrates the views matched by `glob`, checks exit 0 and the result
   // against the reference; returns the command's output.
-  CommandResult calibrateAndCompare(const std::string& glob) {
+  CalibrateCameraResult calibrateAndCompare(const std::string& glob) {
     const fs::path yaml = dir_ / "camera.yaml";
-    CommandResult result = run("--images '" + glob + "' --board 9x6 --square 0.025 --out " + yaml.string());
+    CalibrateCameraResult result = run("--images '" + glob + "' --board 9x6 --square 0.025 --out " + yaml.string());
     EXPECT_EQ(result.exit_status, 0) << result.stderr_text;
     std::cout << result.stdout_text;
 
@@ -149,7 +149,7 @@ class CalibrateCamera : public ::testing::Test {
 };
 
 TEST_F(CalibrateCamera, MatchesOpenCVsReferenceOnTheSampleViews) {
-  const CommandResult result = calibrateAndCompare((kChessboardDir / "left*.jpg").string());
+  const CalibrateCameraResult result = calibrateAndCompare((kChessboardDir / "left*.jpg").string());
   std::smatch match;
   ASSERT_TRUE(std::regex_search(result.stdout_text, match, std::regex("RMS reprojection error: ([0-9.]+) px")));
   EXPECT_LT(std::stod(match[1]), kSampleRmsPx);
@@ -178,7 +178,7 @@ TEST_F(CalibrateCamera, RejectsBadFilesWithReasonsAndStillCalibrates) {
   cv::resize(small, small, cv::Size(320, 240), 0, 0, cv::INTER_AREA);
   ASSERT_TRUE(cv::imwrite((views / "small.png").string(), small));
 
-  const CommandResult result = calibrateAndCompare((views / "*").string());
+  const CalibrateCameraResult result = calibrateAndCompare((views / "*").string());
   const std::string& err = result.stderr_text;
   EXPECT_NE(err.find("rejected " + (views / "no_board.png").string() + ": no 9x6 chessboard found"), std::string::npos)
       << err;
@@ -199,7 +199,7 @@ TEST_F(CalibrateCamera, TooFewUsableViewsIsExit2WithOneLine) {
   const auto all = sampleViews();
   for (int i = 0; i < kMinCalibrationViews - 1; ++i) fs::copy_file(all[i], views / all[i].filename());
   std::ofstream((views / "corrupt.jpg").string()) << "garbage";
-  const CommandResult result =
+  const CalibrateCameraResult result =
       run("--images '" + (views / "*").string() + "' --board 9x6 --square 0.025 --out " + (dir_ / "c.yaml").string());
   EXPECT_EQ(result.exit_status, 2);
   // The corrupt file's rejection, then the one line that says why it stopped.
@@ -212,7 +212,7 @@ TEST_F(CalibrateCamera, TooFewUsableViewsIsExit2WithOneLine) {
 }
 
 TEST_F(CalibrateCamera, NoMatchingFileIsExit2) {
-  const CommandResult result = run("--images '" + (dir_ / "nothing_*.png").string() +
+  const CalibrateCameraResult result = run("--images '" + (dir_ / "nothing_*.png").string() +
                                    "' --board 9x6 --square 0.025 --out " + (dir_ / "c.yaml").string());
   EXPECT_EQ(result.exit_status, 2);
   EXPECT_EQ(lineCount(result.stderr_text), 1) << result.stderr_text;
@@ -237,7 +237,7 @@ TEST_F(CalibrateCamera, BadFlagsAreExit2NamingTheFlag) {
       {"--board 9x6 --square 0.025 --out " + out, "--images"},
   };
   for (const auto& c : cases) {
-    const CommandResult result = run(c.args);
+    const CalibrateCameraResult result = run(c.args);
     EXPECT_EQ(result.exit_status, 2) << c.args;
     EXPECT_EQ(lineCount(result.stderr_text), 1) << c.args << "\n" << result.stderr_text;
     EXPECT_NE(result.stderr_text.find(c.flag), std::string::npos) << c.args << "\n" << result.stderr_text;
@@ -246,7 +246,7 @@ TEST_F(CalibrateCamera, BadFlagsAreExit2NamingTheFlag) {
 }
 
 TEST_F(CalibrateCamera, UnwritableOutIsExit2WithOneLine) {
-  const CommandResult result = run("--images '" + (kChessboardDir / "left*.jpg").string() +
+  const CalibrateCameraResult result = run("--images '" + (kChessboardDir / "left*.jpg").string() +
                                    "' --board 9x6 --square 0.025 --out " + (dir_ / "missing" / "c.yaml").string());
   EXPECT_EQ(result.exit_status, 2);
   EXPECT_EQ(lineCount(result.stderr_text), 1) << result.stderr_text;

@@ -34,7 +34,7 @@ double fragmentUnitRoundoff() {
   return std::ldexp(1.0, -(std::max(bits, 10) + 1));
 }
 
-struct Comparison {
+struct IrradianceComparison {
   double max_error = 0.0;           // |GPU - CPU|, linear
   double max_relative = 0.0;        // over texels >= 1% of the scale
   double max_excess = -1e30;        // error - tolerance; must stay <= 0
@@ -51,14 +51,14 @@ struct Comparison {
 // with `cpu_settings`. Output rounding: RGBA8 0.5 level + 0.1 level of the
 // shader's approximate pow in the encode, at the diffuse map's scale; half
 // floats 2^-11 relative; alpha 0.5 / 255 or 2^-11.
-std::optional<Comparison> runComparison(bool force_8bit, double lamp_gain,
+std::optional<IrradianceComparison> runComparison(bool force_8bit, double lamp_gain,
                                         const passes::EnvironmentMapSettings& gpu_settings,
                                         const passes::EnvironmentMapSettings& cpu_settings, std::string& error) {
   const gles::Capabilities caps =
       force_8bit ? test::sharedCapabilities().withoutExtensions() : test::sharedCapabilities();
   passes::EnvironmentMaps maps;
   if (!maps.init(caps, gpu_settings, error)) return std::nullopt;
-  Comparison result;
+  IrradianceComparison result;
   result.storage = maps.storage();
   result.description = maps.storageDescription();
   if (!force_8bit && maps.storage() != passes::CubeStorage::kLinearHalfFloat) {

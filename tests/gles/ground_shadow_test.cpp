@@ -48,13 +48,13 @@ std::vector<ibl::ShadowLight> roomLights(int count = 8) {
   return ibl::groundShadowLights(ibl::fitLightDome(cube, nullptr, settings));
 }
 
-struct Comparison {
+struct ShadowComparison {
   double mean_abs = 0.0, max_abs = 0.0, p99_abs = 0.0;
 };
 
-Comparison compareWithReference(const passes::GroundShadow& shadow, const std::vector<glm::vec3>& fraction,
+ShadowComparison compareWithReference(const passes::GroundShadow& shadow, const std::vector<glm::vec3>& fraction,
                                 const ibl::ShadowCaster& caster, const std::vector<ibl::ShadowLight>& lights) {
-  Comparison result;
+  ShadowComparison result;
   const int n = shadow.groundTextureSizePx();
   int count = 0;
   std::vector<double> errors;
@@ -152,7 +152,7 @@ TEST_P(GroundShadowTest, DomeShadowMatchesTheReferenceForASphereAndABox) {
     EXPECT_EQ(shadow.shadowPassesLastUpdate(), static_cast<int>(lights.size()));
     const auto fraction = shadow.readFraction(error);
     ASSERT_TRUE(fraction) << error;
-    const Comparison c = compareWithReference(shadow, *fraction, caster, lights);
+    const ShadowComparison c = compareWithReference(shadow, *fraction, caster, lights);
     std::printf("[ shadow   ] %-6s %s, %zu lights: GPU vs CPU model mean |error| %.4f, p99 %.3f, max %.3f (region %.3f m)\n", name,
                 shadow.depthStorageDescription().c_str(), lights.size(), c.mean_abs, c.p99_abs, c.max_abs,
                 shadow.region().half_size_m);

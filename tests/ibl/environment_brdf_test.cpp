@@ -1,3 +1,4 @@
+#include "core/math_constants.hpp"
 #include "ibl/environment_brdf.hpp"
 
 #include <gtest/gtest.h>
@@ -7,8 +8,6 @@
 
 namespace probelight::ibl {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The same integral by another road: over the directions l of the
 // hemisphere on a (cos theta, phi) grid, with the BRDF written out,

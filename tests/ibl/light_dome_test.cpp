@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "ibl/color_transfer.hpp"
 #include "ibl/irradiance.hpp"
 #include "ibl/light_dome.hpp"
 #include "ibl_test_helpers.hpp"
@@ -22,8 +23,6 @@ using testing::angleBetweenRad;
 constexpr DomePlacement kPlacements[] = {DomePlacement::kFixedRegions, DomePlacement::kMedianCut,
                                          DomePlacement::kClustered};
 using testing::fibonacciDirections;
-
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
 
 glm::dvec3 direction(double azimuth_deg, double elevation_deg) {
   const double a = glm::radians(azimuth_deg), e = glm::radians(elevation_deg);

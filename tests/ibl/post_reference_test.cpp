@@ -8,6 +8,8 @@
 #include <cmath>
 #include <vector>
 
+#include "core/math_constants.hpp"
+#include "ibl/color_transfer.hpp"
 #include "ibl/cube_map.hpp"
 #include "ibl/irradiance.hpp"
 #include "ibl/post_reference.hpp"
@@ -16,10 +18,7 @@
 namespace probelight::ibl {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kFace = 24;
-
-double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
 
 const glm::dvec3 kLamp = glm::normalize(glm::dvec3(0.6, -0.2, 0.75));
 const glm::dvec3 kBoard = glm::normalize(glm::dvec3(-0.3, -0.9, 0.3));

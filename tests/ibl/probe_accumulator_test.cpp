@@ -14,7 +14,7 @@
 namespace probelight::ibl {
 namespace {
 
-constexpr int kFace = 32;
+constexpr int kAccumulatorFace = 32;
 
 double lum(const glm::vec3& rgb) { return luminance(glm::dvec3(rgb)); }
 
@@ -29,7 +29,7 @@ glm::vec3 room(const glm::dvec3& d, double lamp_level = 0.0, const glm::dvec3& l
 
 ProbeAccumulatorSettings settingsForTests() {
   ProbeAccumulatorSettings settings;
-  settings.face_size = kFace;
+  settings.face_size = kAccumulatorFace;
   settings.noise.clip_level = 1.0;
   return settings;
 }
@@ -38,14 +38,14 @@ ProbeAccumulatorSettings settingsForTests() {
 // accumulator's own model (so the test measures the rule, not the model).
 ProbeObservation noisyView(std::mt19937& rng, float confidence, double lamp_level = 0.0, bool clip = false) {
   const NoiseLookup noise(settingsForTests().noise);
-  ProbeObservation view(kFace);
+  ProbeObservation view(kAccumulatorFace);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  const std::size_t per_face = static_cast<std::size_t>(kFace) * kFace;
+  const std::size_t per_face = static_cast<std::size_t>(kAccumulatorFace) * kAccumulatorFace;
   for (int face = 0; face < kCubeFaceCount; ++face)
-    for (int y = 0; y < kFace; ++y)
-      for (int x = 0; x < kFace; ++x) {
-        const std::size_t local = static_cast<std::size_t>(y) * kFace + x;
-        glm::vec3 value = room(cubeTexelCenterDirection(face, x, y, kFace), lamp_level);
+    for (int y = 0; y < kAccumulatorFace; ++y)
+      for (int x = 0; x < kAccumulatorFace; ++x) {
+        const std::size_t local = static_cast<std::size_t>(y) * kAccumulatorFace + x;
+        glm::vec3 value = room(cubeTexelCenterDirection(face, x, y, kAccumulatorFace), lamp_level);
         value *= static_cast<float>(1.0 + gauss(rng) * noise.sigma(lum(value)) / std::max(lum(value), 1e-9));
         bool bound = false;
         if (clip && lum(value) > 1.0) {
@@ -63,10 +63,10 @@ double meanRelativeError(const ProbeAccumulator& probe, double lamp_level = 0.0)
   double sum = 0.0;
   long count = 0;
   for (int face = 0; face < kCubeFaceCount; ++face)
-    for (int y = 0; y < kFace; ++y)
-      for (int x = 0; x < kFace; ++x) {
-        const std::size_t i = (static_cast<std::size_t>(face) * kFace + y) * kFace + x;
-        const double truth = lum(room(cubeTexelCenterDirection(face, x, y, kFace), lamp_level));
+    for (int y = 0; y < kAccumulatorFace; ++y)
+      for (int x = 0; x < kAccumulatorFace; ++x) {
+        const std::size_t i = (static_cast<std::size_t>(face) * kAccumulatorFace + y) * kAccumulatorFace + x;
+        const double truth = lum(room(cubeTexelCenterDirection(face, x, y, kAccumulatorFace), lamp_level));
         sum += std::abs(lum(probe.radiance(i)) - truth) / truth;
         ++count;
       }
@@ -77,7 +77,7 @@ TEST(ProbeAccumulator, ASteadyRoomConvergesWithoutFalseChanges) {
   std::mt19937 rng(7);
   ProbeAccumulator probe(settingsForTests());
   AccumulateCounts first = probe.add(noisyView(rng, 100.0f));
-  EXPECT_EQ(first.first, 6L * kFace * kFace);
+  EXPECT_EQ(first.first, 6L * kAccumulatorFace * kAccumulatorFace);
   const double single = meanRelativeError(probe);
   long changed = 0;
   for (int view = 1; view < 20; ++view) changed += probe.add(noisyView(rng, 100.0f)).changed;
@@ -87,7 +87,7 @@ TEST(ProbeAccumulator, ASteadyRoomConvergesWithoutFalseChanges) {
   EXPECT_LT(after, 0.3 * single) << single << " -> " << after;
   // 3 sigma outside the range of a 3x3 neighbourhood: a false alarm needs
   // a 3-sigma outlier beyond 9 samples' extremes. Far under 1 in 1000.
-  EXPECT_LT(changed, 19L * 6 * kFace * kFace / 1000) << changed;
+  EXPECT_LT(changed, 19L * 6 * kAccumulatorFace * kAccumulatorFace / 1000) << changed;
 }
 
 TEST(ProbeAccumulator, ALampSwitchedOnShowsWholeInOneView) {
@@ -102,10 +102,10 @@ TEST(ProbeAccumulator, ALampSwitchedOnShowsWholeInOneView) {
   EXPECT_GT(counts.changed, 0);
   long lamp_texels = 0, lamp_right = 0, others_moved = 0;
   for (int face = 0; face < kCubeFaceCount; ++face)
-    for (int y = 0; y < kFace; ++y)
-      for (int x = 0; x < kFace; ++x) {
-        const std::size_t i = (static_cast<std::size_t>(face) * kFace + y) * kFace + x;
-        const glm::dvec3 d = cubeTexelCenterDirection(face, x, y, kFace);
+    for (int y = 0; y < kAccumulatorFace; ++y)
+      for (int x = 0; x < kAccumulatorFace; ++x) {
+        const std::size_t i = (static_cast<std::size_t>(face) * kAccumulatorFace + y) * kAccumulatorFace + x;
+        const glm::dvec3 d = cubeTexelCenterDirection(face, x, y, kAccumulatorFace);
         const double truth = lum(room(d, 30.0));
         const double got = lum(probe.radiance(i));
         if (truth == 30.0) {
@@ -127,7 +127,7 @@ TEST(ProbeAccumulator, ALampSwitchedOnShowsWholeInOneView) {
 
 TEST(ProbeAccumulator, ASurerViewOutweighsALessSureOne) {
   ProbeAccumulator probe(settingsForTests());
-  ProbeObservation good(kFace), rim(kFace);
+  ProbeObservation good(kAccumulatorFace), rim(kAccumulatorFace);
   // One texel, its values within noise of each other (1% apart at 0.5).
   good.radiance.faces[0][0] = glm::vec3(0.5f);
   good.confidence[0] = 1000.0f;
@@ -141,9 +141,9 @@ TEST(ProbeAccumulator, ASurerViewOutweighsALessSureOne) {
   EXPECT_NEAR(probe.radiance(0).x, (decayed * 0.5 + 10.0 * 0.505) / (decayed + 10.0), 1e-6);
   EXPECT_NEAR(probe.confidence(0), decayed + 10.0, 1e-2);
   // A texel only one of them saw: the other leaves it alone.
-  ProbeObservation elsewhere(kFace);
+  ProbeObservation elsewhere(kAccumulatorFace);
   elsewhere.radiance.faces[1][5] = glm::vec3(0.2f);
-  elsewhere.confidence[static_cast<std::size_t>(kFace) * kFace + 5] = 1.0f;
+  elsewhere.confidence[static_cast<std::size_t>(kAccumulatorFace) * kAccumulatorFace + 5] = 1.0f;
   probe.add(elsewhere);
   EXPECT_NEAR(probe.radiance(0).x, (decayed * 0.5 + 10.0 * 0.505) / (decayed + 10.0), 1e-6);
   EXPECT_EQ(probe.seenTexels(), 2);
@@ -154,9 +154,9 @@ TEST(ProbeAccumulator, ASurerViewOutweighsALessSureOne) {
 TEST(ProbeAccumulator, AClippedSampleIsALowerBound) {
   ProbeAccumulator probe(settingsForTests());
   auto one = [](float value, bool bound, float confidence = 100.0f) {
-    ProbeObservation view(kFace);
+    ProbeObservation view(kAccumulatorFace);
     for (int t = 0; t < 9; ++t) {  // a 3x3 patch, so that neighbourhoods agree
-      const std::size_t i = static_cast<std::size_t>(t / 3) * kFace + t % 3;
+      const std::size_t i = static_cast<std::size_t>(t / 3) * kAccumulatorFace + t % 3;
       view.radiance.faces[0][i] = glm::vec3(value);
       view.confidence[i] = confidence;
       view.lower_bound[i] = bound;
@@ -191,8 +191,8 @@ TEST(ProbeAccumulator, AClippedSampleIsALowerBound) {
 
 TEST(ProbeAccumulator, BadObservationsChangeNothing) {
   ProbeAccumulator probe(settingsForTests());
-  EXPECT_THROW(probe.add(ProbeObservation(kFace * 2)), std::invalid_argument);
-  ProbeObservation view(kFace);
+  EXPECT_THROW(probe.add(ProbeObservation(kAccumulatorFace * 2)), std::invalid_argument);
+  ProbeObservation view(kAccumulatorFace);
   view.radiance.faces[0][0] = glm::vec3(NAN, 0.0f, 0.0f);
   view.confidence[0] = 100.0f;
   view.radiance.faces[0][1] = glm::vec3(INFINITY);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/math_constants.hpp"
 #include "ibl/color_transfer.hpp"
 #include "ibl/cube_map.hpp"
 #include "ibl/irradiance.hpp"
@@ -14,8 +15,6 @@
 
 namespace probelight::ibl {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A sky of radiance `sky` with suns (cap radius 6 deg) of radiance `sun`.
 CubeMapRGB skyWithSuns(const std::vector<glm::dvec3>& suns, double sky, double sun, int n = 32) {

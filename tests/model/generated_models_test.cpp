@@ -7,12 +7,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/math_constants.hpp"
 #include "model/generated_models.hpp"
 
 namespace probelight::model {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 double enclosedVolume(const MeshModel& model) {
   double volume = 0.0;

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/math_constants.hpp"
 #include "model/gltf_loader.hpp"
 #include "model/model_placement.hpp"
 #include "sim/gltf_brdf.hpp"
@@ -21,8 +22,6 @@
 namespace probelight::sim {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-constexpr double kDeg = kPi / 180.0;
 const glm::dvec3 kNormal(0.0, 0.0, 1.0);
 
 GltfSurface surface(glm::dvec3 base, double metallic, double roughness) {
@@ -127,8 +126,8 @@ TEST(GltfBrdf, IsReciprocal) {
 
 TEST(GltfBrdf, IsZeroBelowTheHorizonAndFiniteEverywhere) {
   const GltfSurface s = halfMetal(0.5);
-  EXPECT_EQ(gltf_brdf::evaluate(kNormal, viewAt(30 * kDeg), {0.1, 0.0, -0.99}, s), glm::dvec3(0.0));
-  EXPECT_EQ(gltf_brdf::evaluate(kNormal, {0.0, 0.6, -0.8}, viewAt(30 * kDeg), s), glm::dvec3(0.0));
+  EXPECT_EQ(gltf_brdf::evaluate(kNormal, viewAt(30 * kRadPerDeg), {0.1, 0.0, -0.99}, s), glm::dvec3(0.0));
+  EXPECT_EQ(gltf_brdf::evaluate(kNormal, {0.0, 0.6, -0.8}, viewAt(30 * kRadPerDeg), s), glm::dvec3(0.0));
   EXPECT_EQ(gltf_brdf::pdf(kNormal, {0.0, 0.6, -0.8}, kNormal, s), 0.0);
   EXPECT_EQ(gltf_brdf::sampleDirection(kNormal, {0.0, 0.6, -0.8}, s, 0.3, 0.3, 0.3).pdf, 0.0);
 }
@@ -140,7 +139,7 @@ TEST(GltfBrdf, SmoothSurfacesStayFinite) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (double roughness : {0.0, 1e-6, 1e-3, 0.01}) {
     for (double theta_deg : {0.0, 45.0, 89.0, 89.9999}) {
-      const glm::dvec3 v = viewAt(theta_deg * kDeg);
+      const glm::dvec3 v = viewAt(theta_deg * kRadPerDeg);
       for (const GltfSurface& s : {whiteDielectric(roughness), gold(roughness), halfMetal(roughness)}) {
         const glm::dvec3 at_mirror = gltf_brdf::evaluate(kNormal, v, mirror(v), s);
         for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(at_mirror[c]));
@@ -165,7 +164,7 @@ TEST(GltfBrdf, PdfIntegratesToOne) {
   for (double roughness : {0.05, 0.3, 0.7, 1.0})
     for (double theta_deg : {0.0, 40.0, 75.0})
       for (const GltfSurface& s : {whiteDielectric(roughness), gold(roughness)}) {
-        const glm::dvec3 v = viewAt(theta_deg * kDeg);
+        const glm::dvec3 v = viewAt(theta_deg * kRadPerDeg);
         const double total =
             sphereIntegral(mirror(v), [&](const glm::dvec3& l) { return gltf_brdf::pdf(kNormal, v, l, s); });
         EXPECT_NEAR(total, 1.0, 1e-3) << "roughness " << roughness << ", view " << theta_deg << " deg";
@@ -184,7 +183,7 @@ TEST(GltfBrdf, PdfIntegratesToOne) {
 TEST(GltfBrdf, ImportanceSamplingMatchesQuadrature) {
   std::uint64_t seed = 10;
   auto check = [&](const GltfSurface& s, double roughness, double theta_deg, SmithVisibility form) {
-    const glm::dvec3 v = viewAt(theta_deg * kDeg);
+    const glm::dvec3 v = viewAt(theta_deg * kRadPerDeg);
     const glm::dvec3 quadrature = albedoByQuadrature(v, s, form);
     const Estimate sampled = albedoBySampling(v, s, form, 1 << 17, ++seed);
     for (int c = 0; c < 3; ++c) {
@@ -209,7 +208,7 @@ TEST(GltfBrdf, WhiteFurnaceMetalsSendBackAtMostWhatComesIn) {
   for (SmithVisibility form : kBothForms)
     for (double theta_deg : {0.0, 30.0, 60.0, 75.0, 89.0})
       for (double roughness : {0.05, 0.3, 0.6, 1.0})
-        EXPECT_LE(albedoByQuadrature(viewAt(theta_deg * kDeg), whiteMetal(roughness), form).x, 1.0 + 1e-3)
+        EXPECT_LE(albedoByQuadrature(viewAt(theta_deg * kRadPerDeg), whiteMetal(roughness), form).x, 1.0 + 1e-3)
             << "roughness " << roughness << ", view " << theta_deg << " deg";
   // Roughness 1 (alpha 1) facing the surface has a closed form: D = 1/pi,
   // V = 1 / (2 (1 + mu)) in both forms, F = 1, so the albedo is
@@ -232,7 +231,7 @@ TEST(GltfBrdf, WhiteFurnaceDielectricIsTheSpecsLambertianLimit) {
   for (double theta_deg : {0.0, 30.0})
     for (double roughness : {0.05, 0.3, 0.6, 1.0})
       for (SmithVisibility form : kBothForms)
-        EXPECT_LE(albedoByQuadrature(viewAt(theta_deg * kDeg), whiteDielectric(roughness), form).x, 1.0 + 1e-4)
+        EXPECT_LE(albedoByQuadrature(viewAt(theta_deg * kRadPerDeg), whiteDielectric(roughness), form).x, 1.0 + 1e-4)
             << "roughness " << roughness << ", view " << theta_deg << " deg";
   auto integrand = [](double theta) {
     const double f = 0.04 + 0.96 * std::pow(1.0 - std::cos(theta / 2.0), 5.0);
@@ -249,7 +248,7 @@ TEST(GltfBrdf, WhiteFurnaceDielectricIsTheSpecsLambertianLimit) {
   EXPECT_GT(facing, 0.97);
   EXPECT_LT(facing, 1.0);
   // Grazing, smooth: more out than in (1.2 at 75 deg), as the spec's mix has it.
-  EXPECT_GT(albedoByQuadrature(viewAt(75.0 * kDeg), whiteDielectric(0.05)).x, 1.15);
+  EXPECT_GT(albedoByQuadrature(viewAt(75.0 * kRadPerDeg), whiteDielectric(0.05)).x, 1.15);
 }
 
 // ---- Texture lookup, on the corpus's textured box ----

@@ -11,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "core/math_constants.hpp"
 #include "sim/occluder.hpp"
 #include "sim/scene_geometry.hpp"
 #include "sim/world.hpp"
@@ -18,9 +19,6 @@
 
 namespace probelight::sim {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kDeg = kPi / 180.0;
 
 VirtualOccluder sphereAt(glm::dvec2 position_w, double radius_m) {
   VirtualOccluder sphere;
@@ -59,7 +57,7 @@ void orthonormalBasis(const glm::dvec3& axis, glm::dvec3& e1, glm::dvec3& e2) {
 // The test's own ray-box test (not intersectOccluder): does the ray from
 // origin_w along dir_w hit the box? Slabs in the box's frame, written anew.
 bool rayHitsBox(const VirtualOccluder& box, const glm::dvec3& origin_w, const glm::dvec3& dir_w) {
-  const double yaw = box.box_yaw_deg * kDeg;
+  const double yaw = box.box_yaw_deg * kRadPerDeg;
   const glm::dvec3 ex{std::cos(yaw), std::sin(yaw), 0.0}, ey{-std::sin(yaw), std::cos(yaw), 0.0}, ez{0, 0, 1};
   const glm::dvec3 rel = origin_w - glm::dvec3(box.position_w, 0.5 * box.box_size_m.z);
   const double o[3] = {glm::dot(rel, ex), glm::dot(rel, ey), glm::dot(rel, ez)};
@@ -138,7 +136,7 @@ glm::dvec3 findSun(const World& world) {
   double best_g = -1.0;
   for (double el = 0.25; el < 90.0; el += 0.5)
     for (double az = -180.0; az < 180.0; az += 0.5) {
-      const glm::dvec3 dir = fromAzimuthElevation(az * kDeg, el * kDeg);
+      const glm::dvec3 dir = fromAzimuthElevation(az * kRadPerDeg, el * kRadPerDeg);
       const double g = world.radiance(dir, 0).hdr.g;
       if (g > best_g) {
         best_g = g;
@@ -148,7 +146,7 @@ glm::dvec3 findSun(const World& world) {
   glm::dvec3 e1, e2;
   orthonormalBasis(best, e1, e2);
   glm::dvec3 centroid(0.0);
-  const double step = 0.02 * kDeg;
+  const double step = 0.02 * kRadPerDeg;
   for (int i = -150; i <= 150; ++i)
     for (int j = -150; j <= 150; ++j) {
       const glm::dvec3 dir = glm::normalize(best + i * step * e1 + j * step * e2);
@@ -227,7 +225,7 @@ TEST(GroundShadow, FarPointIsUnshadowedAndBoxCoversItsFootprint) {
   // within atan(1/25) = 2.3 deg of its plane's sides or above 89.3 deg:
   // together under 0.03 of pi, so fraction < 0.53; 0.55 for the grid.
   const VirtualOccluder box = boxAt({0.3, 0.1}, {0.05, 0.05, 0.08}, 30.0);
-  const glm::dvec2 face_normal{std::cos(30.0 * kDeg), std::sin(30.0 * kDeg)};
+  const glm::dvec2 face_normal{std::cos(30.0 * kRadPerDeg), std::sin(30.0 * kRadPerDeg)};
   const glm::dvec2 under = box.position_w + 0.01 * glm::dvec2(-face_normal.y, face_normal.x);
   const glm::dvec2 beside = box.position_w + (0.025 + 0.001) * face_normal;
   const auto near = world.groundShadow({under, beside}, {box}, 0);
@@ -241,7 +239,7 @@ TEST(GroundShadow, SunShadowRemovesTheSunInHdrButHardlyInTheClippedMap) {
   SceneConfig scene = testing::smallScene();  // sun_sky, rotation 0, auto exposure
   World world(scene);
   const glm::dvec3 sun = findSun(world);
-  const double sun_azimuth_deg = std::atan2(sun.y, sun.x) / kDeg, sun_elevation_deg = std::asin(sun.z) / kDeg;
+  const double sun_azimuth_deg = std::atan2(sun.y, sun.x) / kRadPerDeg, sun_elevation_deg = std::asin(sun.z) / kRadPerDeg;
   std::printf("[ shadow   ] sun found at azimuth %.3f deg, elevation %.3f deg\n", sun_azimuth_deg, sun_elevation_deg);
   // environment.hpp: azimuth -120, elevation 40 (the 0.02 deg centroid scan
   // finds a symmetric disc's centre to well under 0.05 deg).
@@ -249,13 +247,13 @@ TEST(GroundShadow, SunShadowRemovesTheSunInHdrButHardlyInTheClippedMap) {
   EXPECT_NEAR(sun_elevation_deg, 40.0, 0.05);
 
   // E_up and the sun's share, by the test's own quadrature of World::radiance.
-  const double sun_cap_rad = 3.0 * kDeg;  // disc 1.5 deg + limb 0.15 deg, with room
+  const double sun_cap_rad = 3.0 * kRadPerDeg;  // disc 1.5 deg + limb 0.15 deg, with room
   const CapIntegral e_up = integrateUpperHemisphere(world, sun, sun_cap_rad);
   const CapIntegral sun_cap = integrateCap(world, sun, sun_cap_rad, sun_cap_rad);
   // Sky under the sun's cap: the sky just outside it, over the cap's projected solid angle.
   glm::dvec3 e1, e2;
   orthonormalBasis(sun, e1, e2);
-  const glm::dvec3 sky_beside = world.radiance(glm::normalize(sun + std::tan(4.0 * kDeg) * e1), 0).hdr;
+  const glm::dvec3 sky_beside = world.radiance(glm::normalize(sun + std::tan(4.0 * kRadPerDeg) * e1), 0).hdr;
   const double sun_share =
       (sun_cap.hdr.g - sky_beside.g * 2.0 * kPi * (1.0 - std::cos(sun_cap_rad)) * sun.z) / e_up.hdr.g;
   const double simulator_e_up = world.exposure() * world.groundIrradianceUp(0).g;
@@ -288,7 +286,7 @@ TEST(GroundShadow, SunShadowRemovesTheSunInHdrButHardlyInTheClippedMap) {
   const glm::dvec3 umbra_axis = capTo(umbra, umbra_half), beside_axis = capTo(beside, beside_half);
   // Premise: the sun's whole disc (1.65 deg with its limb) is outside the
   // cap seen from `beside`, with a degree to spare.
-  ASSERT_GT(std::acos(glm::dot(beside_axis, sun)), beside_half + 2.65 * kDeg);
+  ASSERT_GT(std::acos(glm::dot(beside_axis, sun)), beside_half + 2.65 * kRadPerDeg);
 
   const CapIntegral umbra_blocked = integrateCap(world, umbra_axis, umbra_half, sun_cap_rad);
   const CapIntegral beside_blocked = integrateCap(world, beside_axis, beside_half, sun_cap_rad);
@@ -327,7 +325,7 @@ TEST(GroundShadow, SunPenumbraFollowsTheDiscFinerThanTheGrid) {
   SceneConfig scene = testing::smallScene();  // sun_sky
   World world(scene);
   const glm::dvec3 sun = findSun(world);
-  const double sun_cap_rad = 3.0 * kDeg;
+  const double sun_cap_rad = 3.0 * kRadPerDeg;
   const CapIntegral e_up = integrateUpperHemisphere(world, sun, sun_cap_rad);
   const double r = 0.035;
   const glm::dvec3 center{0.0, 0.0, r};
@@ -346,7 +344,7 @@ TEST(GroundShadow, SunPenumbraFollowsTheDiscFinerThanTheGrid) {
   std::vector<glm::dvec2> points;
   std::vector<double> expected;
   for (int k = -6; k <= 6; ++k) {
-    const glm::dvec3 p = umbra + offsetFor(k * 0.3 * kDeg) * across;  // the disc's edge (1.65 deg) at k = +-5.5
+    const glm::dvec3 p = umbra + offsetFor(k * 0.3 * kRadPerDeg) * across;  // the disc's edge (1.65 deg) at k = +-5.5
     points.push_back({p.x, p.y});
     // The test's own integral of L cos over the cone: around the sun by a
     // fine polar rule (0.0075 deg x 0.004..0.3 deg) with the cone's exact
@@ -409,7 +407,7 @@ TEST(GroundShadow, SunPenumbraFollowsTheDiscFinerThanTheGrid) {
 TEST(GroundShadow, BoxMatchesIndependentMonteCarlo) {
   World world(uniformScene());
   const VirtualOccluder box = boxAt({0.02, -0.01}, {0.05, 0.05, 0.08}, 30.0);
-  const double yaw = box.box_yaw_deg * kDeg;
+  const double yaw = box.box_yaw_deg * kRadPerDeg;
   const glm::dvec2 ex{std::cos(yaw), std::sin(yaw)}, ey{-std::sin(yaw), std::cos(yaw)};
   // A quarter edge out from the middle of the +x face's foot, and diagonally
   // off the (+x, +y) corner.
@@ -557,7 +555,7 @@ TEST(GroundShadow, RenderWithOccludersDrawsTheObjectAndItsShadow) {
 
   // 3. In the sun's shadow the ground is darker by the hdr fraction.
   {
-    const glm::dvec3 sun = fromAzimuthElevation(45.0 * kDeg, 40.0 * kDeg);
+    const glm::dvec3 sun = fromAzimuthElevation(45.0 * kRadPerDeg, 40.0 * kRadPerDeg);
     const glm::dvec3 center{sphere.position_w, sphere.radius_m};
     const glm::dvec3 umbra = center - (center.z / sun.z) * sun;
     auto project = [&](const glm::dvec2& g) {

@@ -5,14 +5,13 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/math_constants.hpp"
 #include "sim/environment.hpp"
 #include "sim/world.hpp"
 #include "sim_test_helpers.hpp"
 
 namespace probelight::sim {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 TEST(IrradianceTruth, UniformWhiteWorldGivesPiLInEveryDirection) {
   // Uniform sky L = 1 over a ground of albedo 1 with no texture: the ground

@@ -12,6 +12,7 @@
 #include <numbers>
 #include <vector>
 
+#include "core/math_constants.hpp"
 #include "model/generated_models.hpp"
 #include "sim/environment.hpp"
 #include "sim/gltf_brdf.hpp"
@@ -22,8 +23,6 @@
 
 namespace probelight::sim {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 double luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.r + 0.7152 * rgb.g + 0.0722 * rgb.b; }
 

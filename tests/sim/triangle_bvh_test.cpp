@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/math_constants.hpp"
 #include "model/gltf_loader.hpp"
 #include "model/model_placement.hpp"
 #include "sim/triangle_bvh.hpp"
@@ -25,7 +26,6 @@
 namespace probelight::sim {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const std::string kCorpus = "/usr/share/assimp/models/glTF2/";
 

@@ -28,7 +28,7 @@ double upIrradiance(const std::vector<ibl::DomeLight>& lights) {
 std::vector<ibl::DomeLight> fitA() { return {light(0, 30, 1.0), light(90, 50, 0.5), light(180, 20, 0.2), light(270, 70, 0.1)}; }
 std::vector<ibl::DomeLight> fitB() { return {light(20, 35, 0.3), light(100, 45, 1.5), light(200, 25, 0.4), light(280, 60, 0.1)}; }
 
-constexpr double kFrameS = 1.0 / 30.0;
+constexpr double kFramePeriodS = 1.0 / 30.0;
 constexpr double kFadeS = 0.5;  // 15 frames
 
 TEST(LightTransition, FirstFitShowsAtOnce) {
@@ -49,7 +49,7 @@ TEST(LightTransition, NewFitFadesInOverTheFadeTimeWithoutAPop) {
   const double total_change = std::abs(upIrradiance(fitB()) - upIrradiance(fitA()));
   std::vector<ibl::DomeLight> previous = transition.at(1.0);
   for (int frame = 1; frame <= 20; ++frame) {
-    const double now = 1.0 + frame * kFrameS;
+    const double now = 1.0 + frame * kFramePeriodS;
     const std::vector<ibl::DomeLight> shown = transition.at(now);
     ASSERT_EQ(shown.size(), previous.size());
     // Linear in time: each frame moves the ground's irradiance by at most a
@@ -60,7 +60,7 @@ TEST(LightTransition, NewFitFadesInOverTheFadeTimeWithoutAPop) {
       const double turn = std::acos(std::clamp(glm::dot(shown[i].direction_w, previous[i].direction_w), -1.0, 1.0));
       EXPECT_LE(turn, glm::radians(60.0) / 15.0) << "light " << i << " frame " << frame;  // no pair is 60 deg apart here
     }
-    EXPECT_EQ(transition.moving(now), frame * kFrameS < kFadeS) << frame;
+    EXPECT_EQ(transition.moving(now), frame * kFramePeriodS < kFadeS) << frame;
     previous = shown;
   }
   // Done: exactly the new fit.
