@@ -19,7 +19,8 @@
 # from nothing takes about half the compile time. An edited file recompiles
 # its whole batch, so a developer's build leaves it off (the default). It
 # needs file-local names that differ between the files of a target; CI's
-# build is the check.
+# build is the check. A batch names its sources by absolute path, so its
+# cache entries serve a later clone in the same folder only.
 compile_cmake_args=("-DCMAKE_UNITY_BUILD=${PROBELIGHT_UNITY_BUILD:-OFF}" -DCMAKE_UNITY_BUILD_BATCH_SIZE=8)
 if command -v ccache >/dev/null; then
   compile_cmake_args+=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
