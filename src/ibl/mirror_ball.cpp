@@ -7,10 +7,6 @@
 
 namespace probelight::ibl {
 
-namespace {
-
-}  // namespace
-
 std::optional<glm::dvec2> reflectedDirectionToPixel(const MirrorBallView& view, const glm::dvec3& reflected_w,
                                                     int iterations) {
   const glm::dvec3 camera_center_w = view.pose.cameraCenterWorld();

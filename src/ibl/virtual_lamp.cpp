@@ -8,10 +8,6 @@
 
 namespace probelight::ibl {
 
-namespace {
-
-}  // namespace
-
 std::optional<VirtualLampProblem> virtualLampProblem(const VirtualLamp& lamp) {
   if (!allFinite(lamp.position_w)) return VirtualLampProblem{"position", "must be three finite numbers"};
   if (!(lamp.position_w.z > 0.0)) return VirtualLampProblem{"position", "the lamp must be above the ground (z > 0)"};

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <sstream>
 
 #include "core/math_constants.hpp"
@@ -11,9 +10,6 @@
 #include "ibl/probe_outline.hpp"
 
 namespace probelight::ibl {
-namespace {
-
-}  // namespace
 
 std::string percentText(double fraction) {
   std::ostringstream out;

@@ -1,7 +1,6 @@
 #include "sim/camera_path.hpp"
 
 #include <cmath>
-#include <numbers>
 #include <random>
 
 #include "core/math_constants.hpp"

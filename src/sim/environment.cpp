@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <numbers>
 #include <utility>
 
 #include <opencv2/imgcodecs.hpp>

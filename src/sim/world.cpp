@@ -7,7 +7,6 @@
 #include <limits>
 #include <map>
 #include <mutex>
-#include <numbers>
 #include <thread>
 #include <unordered_map>
 

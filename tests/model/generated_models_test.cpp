@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numbers>
 
 #include "core/math_constants.hpp"
 #include "model/generated_models.hpp"

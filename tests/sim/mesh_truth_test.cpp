@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
-#include <numbers>
 #include <vector>
 
 #include "core/math_constants.hpp"

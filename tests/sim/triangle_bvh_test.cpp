@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <limits>
 #include <map>
-#include <numbers>
 #include <optional>
 #include <random>
 #include <string>
