@@ -206,16 +206,23 @@ std::optional<std::string> textOpenCvWouldMisreadProblem(const std::string& text
   return std::nullopt;
 }
 
-// OpenCV's parser loops forever on a line that starts with '-' (but not
-// "---") after a "..." end-of-document line (found by
-// fuzz/probelight_yaml_fuzzer.cpp), and reads only the first of several
-// documents, silently. Every probelight file is one document: after "..."
-// only blank lines and comments may follow, and a "---" may only open the
-// file. Empty when all is well, else the problem with its line number.
-std::optional<std::string> secondDocumentProblem(const std::string& text) {
-  auto isMarker = [](std::string_view line, std::string_view marker) {
-    return line.substr(0, 3) == marker && (line.size() == 3 || line[3] == ' ' || line[3] == '\t' || line[3] == '#');
-  };
+// OpenCV 4.6's YAML reader steps 3 characters past wherever its top-level
+// collection ends, taking that for a "..." or "---" marker, and loops
+// forever when it lands on a '-' that is not "---" (found by
+// fuzz/probelight_yaml_fuzzer.cpp: "...\n-", then, in CI on 2026-12-07,
+// "...-b" and "--- -m" with a shorter line after). It also reads only the
+// first of several documents, silently. So every probelight file is one
+// document whose top level can end only at the end of the file or at a
+// "..." line, as OpenCV's own writer makes them:
+//   - a line that starts with "---" or "..." is that marker alone, with at
+//     most a comment after it (OpenCV takes the three characters as the
+//     marker whatever follows them);
+//   - "---" only before the first field; after "...", only blank lines and
+//     comments;
+//   - the top level starts at column 0: an indented top level ends at the
+//     first line less indented, which is where the stepping goes wrong.
+// Empty when all is well, else the problem with its line number.
+std::optional<std::string> documentStructureProblem(const std::string& text) {
   bool content_seen = false;
   int line_number = 0, document_end_line = 0;
   for (std::size_t from = 0; from <= text.size();) {
@@ -225,23 +232,30 @@ std::optional<std::string> secondDocumentProblem(const std::string& text) {
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     ++line_number;
     from = to + 1;
+    const std::string where = "line " + std::to_string(line_number) + ": ";
     const std::size_t first = line.find_first_not_of(" \t");
     const bool blank = first == std::string_view::npos || line[first] == '#';
     if (document_end_line != 0) {
       if (!blank)
-        return "line " + std::to_string(line_number) + ": more after the end of the document ('...' at line " +
-               std::to_string(document_end_line) + "); probelight reads one YAML document a file";
+        return where + "more after the end of the document ('...' at line " + std::to_string(document_end_line) +
+               "); probelight reads one YAML document a file";
       continue;
     }
-    if (isMarker(line, "...")) {
-      document_end_line = line_number;
-    } else if (isMarker(line, "---")) {
-      if (content_seen)
-        return "line " + std::to_string(line_number) +
-               ": a second YAML document begins ('---'); probelight reads one YAML document a file";
+    const std::string_view marker = line.substr(0, 3);
+    if (marker == "..." || marker == "---") {
       const std::size_t rest = line.find_first_not_of(" \t", 3);
-      content_seen = rest != std::string_view::npos && line[rest] != '#';
+      const bool stands_alone = rest == std::string_view::npos || line[rest] == '#';
+      if (!stands_alone)
+        return where + "text after '" + std::string(marker) +
+               "' on its line; the marker stands alone, and the fields go on the lines below it";
+      if (marker == "...") {
+        document_end_line = line_number;
+      } else if (content_seen) {
+        return where + "a second YAML document begins ('---'); probelight reads one YAML document a file";
+      }
     } else if (!blank && line[0] != '%') {
+      if (!content_seen && first != 0)
+        return where + "the top level is indented; its fields start at column 0";
       content_seen = true;
     }
   }
@@ -254,7 +268,7 @@ ConfigReader ConfigReader::fromText(const std::string& yaml_text, const std::str
   if (yaml_text.find_first_not_of(" \t\r\n") == std::string::npos) throw ConfigError(display_name + ": file is empty");
   if (const std::optional<std::string> problem = textOpenCvWouldMisreadProblem(yaml_text))
     throw ConfigError(display_name + ": " + *problem + "; probelight's files are a few levels deep");
-  if (const std::optional<std::string> problem = secondDocumentProblem(yaml_text))
+  if (const std::optional<std::string> problem = documentStructureProblem(yaml_text))
     throw ConfigError(display_name + ": " + *problem);
   // OpenCV refuses YAML without its "%YAML:1.0" first line; people writing
   // rig.yaml by hand should not have to know that.

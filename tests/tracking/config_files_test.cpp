@@ -483,24 +483,36 @@ TEST(ConfigReader, TooDeepNestingOrATooLargeFileIsOneLineNotACrash) {
                     "deep65.yaml", "", "nested deeper than 64");
 }
 
-// OpenCV's parser looped forever on a '-' line after a "..." end of
-// document (libFuzzer found it in CI: a 10 s timeout), and it reads only the
-// first of several documents without a word. Each is now one line naming the
-// file and the line; a leading "---", a closing "..." and comments after it
-// still read.
+// OpenCV 4.6's reader steps 3 characters past wherever its top level ends
+// and loops forever when it lands on a '-' (libFuzzer found three such
+// files, two of them in CI as 10 s timeouts), and it reads only the first
+// of several documents without a word. Each shape that can end the top
+// level early is now one line naming the file and the line; a leading
+// "---", a closing "..." and comments after either still read.
 TEST(ConfigReader, ASecondDocumentOrTextAfterTheEndIsOneLineNotAHang) {
   TempFolder folder;
-  const std::string hang = folder.write("hang.yaml", "%YAML:1.0\ntag_id: 7\n...\n-\n");
-  expectConfigError([&] { config::loadRigFile(hang); }, hang, "", "line 4: more after the end of the document ('...' at line 3)");
-  const std::string second = folder.write("second.yaml", "---\ntag_id: 7\n---\ntag_id: 8\n");
-  expectConfigError([&] { config::loadRigFile(second); }, second, "", "line 3: a second YAML document begins");
-  const std::string after_end = folder.write("after_end.yaml", "tag_id: 7\n...\r\n---\ntag_id: 8\n");
-  expectConfigError([&] { config::loadRigFile(after_end); }, after_end, "", "line 3: more after the end");
+  const auto expectRefused = [&](const std::string& name, const std::string& text, const std::string& problem) {
+    const std::string path = folder.write(name, text);
+    expectConfigError([&] { config::loadRigFile(path); }, path, "", problem);
+  };
+  expectRefused("hang.yaml", "%YAML:1.0\ntag_id: 7\n...\n-\n",
+                "line 4: more after the end of the document ('...' at line 3)");
+  // OpenCV takes "..." and "---" as markers whatever follows them on the
+  // line; each of these, then a shorter line, looped forever.
+  expectRefused("glued.yaml", "tag_id: 7\n...-b\n\n", "line 2: text after '...' on its line");
+  expectRefused("spaced.yaml", "tag_id: 7\n... - b\n\n", "line 2: text after '...' on its line");
+  expectRefused("dashes.yaml", "----m\n\nm\n\n", "line 1: text after '---' on its line");
+  expectRefused("inline.yaml", "--- -m\n\nm\n\n", "line 1: text after '---' on its line");
+  // An indented top level ends at the first line less indented, the same
+  // early end.
+  expectRefused("indented.yaml", " tag_id: 7\ntag_family: tag36h11\n\n", "line 1: the top level is indented");
+  expectRefused("second.yaml", "---\ntag_id: 7\n---\ntag_id: 8\n", "line 3: a second YAML document begins");
+  expectRefused("after_end.yaml", "tag_id: 7\n...\r\n---\ntag_id: 8\n", "line 3: more after the end");
   ConfigReader ok = ConfigReader::fromText("%YAML:1.0\n--- # settings\n# a comment\na: 1\nb: '...'\n...\n\n  # done\n", "ok.yaml");
   EXPECT_EQ(ok.readInt("a"), 1);
   EXPECT_EQ(ok.readString("b", ""), "...");
-  ConfigReader inline_document = ConfigReader::fromText("--- {a: 2}\n", "inline.yaml");
-  EXPECT_EQ(inline_document.readInt("a"), 2);
+  ConfigReader marker_then_comment = ConfigReader::fromText("---# settings\na:\n  b: 2\n...# done\n", "tight.yaml");
+  EXPECT_EQ(marker_then_comment.section("a").readInt("b"), 2);
 }
 
 // OpenCV read these silently as other numbers (issue 15, D2, D3): now each
