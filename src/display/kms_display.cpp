@@ -187,8 +187,7 @@ bool KmsDisplay::setUpEgl(std::string& error) {
     eglTerminate(display);
     return false;
   }
-  const EGLint context_attributes[] = {EGL_CONTEXT_CLIENT_VERSION, 2, EGL_NONE};
-  EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attributes);
+  EGLContext context = gles::createGlesContext(display, config);
   EGLSurface surface = eglCreateWindowSurface(display, config, reinterpret_cast<EGLNativeWindowType>(surface_), nullptr);
   if (context == EGL_NO_CONTEXT || surface == EGL_NO_SURFACE) {
     error = "display: EGL context or window surface: " + gles::eglErrorName(eglGetError());

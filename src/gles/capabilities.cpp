@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <string_view>
 
 #include <EGL/egl.h>
 #include <GLES2/gl2.h>
@@ -33,6 +34,26 @@ int currentConfigSamples(EGLDisplay display) {
 }
 
 }  // namespace
+
+bool parseGlesVersion(const std::string& gl_version, int& major, int& minor) {
+  // GLES: "OpenGL ES N.M<space><vendor-specific information>" (ES 2.0
+  // section 6.1.5; ES 3.2 section 20.2).
+  static constexpr std::string_view kPrefix = "OpenGL ES ";
+  if (gl_version.compare(0, kPrefix.size(), kPrefix) != 0) return false;
+  std::size_t at = kPrefix.size();
+  auto number = [&](int& value) {
+    const std::size_t from = at;
+    value = 0;
+    while (at < gl_version.size() && gl_version[at] >= '0' && gl_version[at] <= '9' && at - from < 3)
+      value = value * 10 + (gl_version[at++] - '0');
+    return at > from;
+  };
+  int parsed_major = 0, parsed_minor = 0;
+  if (!number(parsed_major) || at >= gl_version.size() || gl_version[at++] != '.' || !number(parsed_minor)) return false;
+  major = parsed_major;
+  minor = parsed_minor;
+  return true;
+}
 
 Capabilities probeCapabilities() {
   Capabilities caps;
@@ -89,7 +110,31 @@ Capabilities probeCapabilities() {
   caps.max_viewport_px = std::min(viewport_dims[0], viewport_dims[1]);
   caps.renderer = glString(GL_RENDERER);
   caps.version = glString(GL_VERSION);
+  parseGlesVersion(caps.version, caps.gles_major_version, caps.gles_minor_version);
   return caps;
+}
+
+std::optional<HalfFloatFormat> Capabilities::halfFloatRenderFormat() const {
+  if (gles_major_version >= 3 && color_buffer_float) return HalfFloatFormat{kGlRgba16f, kGlHalfFloat};
+  if (texture_half_float && color_buffer_half_float) return HalfFloatFormat{GL_RGBA, GL_HALF_FLOAT_OES};
+  return std::nullopt;
+}
+
+std::string Capabilities::halfFloatRoute() const {
+  const std::string es = "ES " + std::to_string(gles_major_version) + "." + std::to_string(gles_minor_version);
+  if (gles_major_version >= 3 && color_buffer_float) return "RGBA16F: " + es + " with EXT_color_buffer_float";
+  if (texture_half_float && color_buffer_half_float)
+    return "RGBA half float: " + es + " with OES_texture_half_float and EXT_color_buffer_half_float";
+  std::string missing;
+  auto lacks = [&missing](bool present, const char* name) {
+    if (present) return;
+    missing += missing.empty() ? " without " : ", ";
+    missing += name;
+  };
+  if (gles_major_version >= 3) lacks(color_buffer_float, "EXT_color_buffer_float");
+  lacks(texture_half_float, "OES_texture_half_float");
+  lacks(color_buffer_half_float, "EXT_color_buffer_half_float");
+  return es + missing;
 }
 
 Capabilities Capabilities::withoutExtensions() const {
@@ -102,6 +147,8 @@ Capabilities Capabilities::withoutExtensions() const {
   plain.max_renderbuffer_size_px = max_renderbuffer_size_px;
   plain.max_viewport_px = max_viewport_px;
   plain.egl_config_samples = egl_config_samples;  // the surface's, not an extension
+  plain.gles_major_version = 2;
+  plain.gles_minor_version = 0;
   plain.renderer = renderer + " [extensions masked]";
   plain.version = version;
   return plain;
@@ -133,7 +180,7 @@ std::string Capabilities::summary() const {
   flag(egl_dmabuf_import, "dmabuf_import");
   flag(multisampled_render_to_texture, "msaa_render_to_texture");
   if (multisampled_render_to_texture) text += " (" + std::to_string(max_samples) + " samples)";
-  text += canRenderHalfFloat() ? " | maps: half float" : " | maps: 8-bit";
+  text += (canRenderHalfFloat() ? " | maps: half float (" : " | maps: 8-bit (") + halfFloatRoute() + ")";
   return text;
 }
 

@@ -3,6 +3,7 @@
 // reports ES 3.2 even for an ES 2 request; the board's GPU does not).
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include <GLES2/gl2.h>
@@ -10,7 +11,26 @@
 
 namespace probelight::gles {
 
+// How this context stores linear half floats in a texture it can also
+// render to. GLES2's extensions allocate an unsized GL_RGBA texture of type
+// GL_HALF_FLOAT_OES; ES 3 allocates the sized GL_RGBA16F, and then the type
+// must be ES 3's GL_HALF_FLOAT (a sized format refuses the OES enum).
+struct HalfFloatFormat {
+  GLint internal_format = GL_RGBA;
+  GLenum type = GL_HALF_FLOAT_OES;
+};
+
+// ES 3.0 enums, for the sized half-float path in an ES 3 context; the GLES2
+// headers we compile against do not define them.
+inline constexpr GLint kGlRgba16f = 0x881A;   // GL_RGBA16F
+inline constexpr GLenum kGlHalfFloat = 0x140B;  // GL_HALF_FLOAT
+
 struct Capabilities {
+  // The context's OpenGL ES version, from GL_VERSION ("OpenGL ES 3.2 ...").
+  // The kiosk asks for ES 3 where the display offers it and ES 2 otherwise;
+  // its shaders are GLSL ES 1.00 either way.
+  int gles_major_version = 2;
+  int gles_minor_version = 0;
   bool texture_half_float = false;         // GL_OES_texture_half_float
   bool texture_half_float_linear = false;  // GL_OES_texture_half_float_linear
   bool color_buffer_half_float = false;    // GL_EXT_color_buffer_half_float
@@ -49,11 +69,17 @@ struct Capabilities {
   std::string version;   // GL_VERSION
 
   // Stages may store linear half floats only when they can both sample and
-  // render them; otherwise they use the 8-bit path.
-  bool canRenderHalfFloat() const { return texture_half_float && color_buffer_half_float; }
-  // A copy with every optional extension and fragment highp cleared, and
-  // the texture units cut to GLES2's minimum of 8, to run (and test) the
-  // plain 8-bit, mediump-declared path on any GPU.
+  // render them; otherwise they use the 8-bit path. An ES 3 context renders
+  // sized RGBA16F with EXT_color_buffer_float (V3D, the Pi 4's GPU, offers
+  // only that: no EXT_color_buffer_half_float); an ES 2 context needs
+  // OES_texture_half_float and EXT_color_buffer_half_float.
+  std::optional<HalfFloatFormat> halfFloatRenderFormat() const;
+  bool canRenderHalfFloat() const { return halfFloatRenderFormat().has_value(); }
+  // Which of those routes the maps take, or why none: for the start-up line.
+  std::string halfFloatRoute() const;
+  // A copy with every optional extension and fragment highp cleared, the
+  // version cut to ES 2.0 and the texture units to GLES2's minimum of 8, to
+  // run (and test) the plain 8-bit, mediump-declared path on any GPU.
   Capabilities withoutExtensions() const;
   // One line for logs: renderer, version, precision and extension flags.
   std::string summary() const;
@@ -61,5 +87,8 @@ struct Capabilities {
 
 // Queries the context current on this thread.
 Capabilities probeCapabilities();
+// "OpenGL ES 3.2 Mesa 22.3.6" -> 3, 2. False, and both left alone, for a
+// string that is not a GLES version (then the GLES2 defaults stand).
+bool parseGlesVersion(const std::string& gl_version, int& major, int& minor);
 
 }  // namespace probelight::gles

@@ -50,9 +50,8 @@ std::unique_ptr<EglContext> finishContext(EGLDisplay display, bool use_pbuffer, 
   if (!eglChooseConfig(display, config_attributes, &config, 1, &config_count) || config_count < 1) {
     return fail("no RGBA8 OpenGL ES 2 config");
   }
-  const EGLint context_attributes[] = {EGL_CONTEXT_CLIENT_VERSION, 2, EGL_NONE};
-  EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attributes);
-  if (context == EGL_NO_CONTEXT) return fail("eglCreateContext(ES 2) failed");
+  EGLContext context = createGlesContext(display, config);
+  if (context == EGL_NO_CONTEXT) return fail("eglCreateContext(ES 3 or ES 2) failed");
   EGLSurface surface = EGL_NO_SURFACE;
   if (use_pbuffer) {
     const EGLint pbuffer_attributes[] = {EGL_WIDTH, 1, EGL_HEIGHT, 1, EGL_NONE};
@@ -72,6 +71,23 @@ std::unique_ptr<EglContext> finishContext(EGLDisplay display, bool use_pbuffer, 
 }
 
 }  // namespace
+
+EGLContext createGlesContext(EGLDisplay display, EGLConfig config) {
+  EGLint renderable = 0;
+  eglGetConfigAttrib(display, config, EGL_RENDERABLE_TYPE, &renderable);
+  const char* version = eglQueryString(display, EGL_VERSION);
+  const bool egl_1_5_or_later = version != nullptr && (version[0] > '1' || std::strncmp(version, "1.5", 3) >= 0);
+  const bool can_ask_for_es3 = egl_1_5_or_later || hasExtension(eglQueryString(display, EGL_EXTENSIONS), "EGL_KHR_create_context");
+  if (can_ask_for_es3 && (renderable & EGL_OPENGL_ES3_BIT_KHR) != 0) {
+    const EGLint es3[] = {EGL_CONTEXT_CLIENT_VERSION, 3, EGL_NONE};
+    if (EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, es3); context != EGL_NO_CONTEXT)
+      return context;
+    // A driver (or MESA_GLES_VERSION_OVERRIDE=2.0) that lists ES 3 configs
+    // but will not make the context: ES 2 below.
+  }
+  const EGLint es2[] = {EGL_CONTEXT_CLIENT_VERSION, 2, EGL_NONE};
+  return eglCreateContext(display, config, EGL_NO_CONTEXT, es2);
+}
 
 std::string eglErrorName(EGLint code) {
   const char* name = "unknown EGL error";

@@ -1,4 +1,4 @@
-// EGL display + GLES2 context. The handles live in EglContext; how the display
+// EGL display + OpenGL ES context (ES 3 where offered, GLSL ES 1.00 shaders). The handles live in EglContext; how the display
 // and the drawable were obtained (surfaceless, EGL device, pbuffer, and later
 // GBM/KMS) is the factory's business, so a KMS output can reuse everything
 // here and only add its own factory and surface kind.
@@ -54,5 +54,13 @@ class EglContext {
 
 // Human-readable name of an EGL error code, e.g. "EGL_BAD_MATCH (0x3009)".
 std::string eglErrorName(EGLint code);
+
+// An OpenGL ES context on `config`: ES 3 where the config renders ES 3 and
+// the display can make one (EGL 1.5 or EGL_KHR_create_context), else ES 2.
+// The shaders are GLSL ES 1.00 either way, which every ES 3 context runs;
+// what ES 3 adds is the sized RGBA16F render target (V3D, the Pi 4's GPU,
+// offers half-float rendering only that way). EGL_NO_CONTEXT on failure.
+// Configs are chosen with EGL_OPENGL_ES2_BIT, which every ES 3 config has too.
+EGLContext createGlesContext(EGLDisplay display, EGLConfig config);
 
 }  // namespace probelight::gles

@@ -92,6 +92,11 @@ GlObjectCounts countLiveGlObjects() {
 
 std::optional<Texture> createTexture2D(int width, int height, GLenum format, GLenum type, GLint filter,
                                        const void* pixels, std::string& error) {
+  return createTexture2D(width, height, static_cast<GLint>(format), format, type, filter, pixels, error);
+}
+
+std::optional<Texture> createTexture2D(int width, int height, GLint internal_format, GLenum format, GLenum type,
+                                       GLint filter, const void* pixels, std::string& error) {
   Texture texture = Texture::create();
   glBindTexture(GL_TEXTURE_2D, texture.id());
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
@@ -99,7 +104,7 @@ std::optional<Texture> createTexture2D(int width, int height, GLenum format, GLe
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(format), width, height, 0, format, type, pixels);
+  glTexImage2D(GL_TEXTURE_2D, 0, internal_format, width, height, 0, format, type, pixels);
   if (!checkGl("glTexImage2D(GL_TEXTURE_2D)", error)) {
     error += " for a " + std::to_string(width) + "x" + std::to_string(height) + " texture";
     return std::nullopt;
@@ -108,6 +113,11 @@ std::optional<Texture> createTexture2D(int width, int height, GLenum format, GLe
 }
 
 std::optional<Texture> createCubeTexture(int face_size, GLenum format, GLenum type, std::string& error) {
+  return createCubeTexture(face_size, static_cast<GLint>(format), format, type, error);
+}
+
+std::optional<Texture> createCubeTexture(int face_size, GLint internal_format, GLenum format, GLenum type,
+                                         std::string& error) {
   Texture texture = Texture::create();
   glBindTexture(GL_TEXTURE_CUBE_MAP, texture.id());
   glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
@@ -115,8 +125,8 @@ std::optional<Texture> createCubeTexture(int face_size, GLenum format, GLenum ty
   glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   for (int face = 0; face < 6; ++face) {
-    glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face), 0, static_cast<GLint>(format), face_size,
-                 face_size, 0, format, type, nullptr);
+    glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + static_cast<GLenum>(face), 0, internal_format, face_size, face_size,
+                 0, format, type, nullptr);
   }
   if (!checkGl("glTexImage2D(GL_TEXTURE_CUBE_MAP_*)", error)) {
     error += " for a cube map of " + std::to_string(face_size) + " px faces";

@@ -90,11 +90,17 @@ struct GlObjectCounts {
 GlObjectCounts countLiveGlObjects();
 
 // Allocates a 2D texture with the given filter and CLAMP_TO_EDGE wrap.
-// `type` GL_UNSIGNED_BYTE or GL_HALF_FLOAT_OES; `pixels` may be null.
+// `type` GL_UNSIGNED_BYTE or GL_HALF_FLOAT_OES; `pixels` may be null. The
+// internal format is `format` (GLES2's unsized formats) unless given: ES 3's
+// sized GL_RGBA16F (Capabilities::halfFloatRenderFormat).
 std::optional<Texture> createTexture2D(int width, int height, GLenum format, GLenum type, GLint filter,
                                        const void* pixels, std::string& error);
+std::optional<Texture> createTexture2D(int width, int height, GLint internal_format, GLenum format, GLenum type,
+                                       GLint filter, const void* pixels, std::string& error);
 // Allocates the six faces of a square cube map, NEAREST filtering, CLAMP_TO_EDGE.
 std::optional<Texture> createCubeTexture(int face_size, GLenum format, GLenum type, std::string& error);
+std::optional<Texture> createCubeTexture(int face_size, GLint internal_format, GLenum format, GLenum type,
+                                         std::string& error);
 
 // Describes why a framebuffer is incomplete, e.g. "GL_FRAMEBUFFER_UNSUPPORTED".
 std::string framebufferStatusName(GLenum status);

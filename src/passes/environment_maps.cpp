@@ -122,11 +122,11 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
   if (!quad_.init(error)) return false;
 
   storage_ = CubeStorage::kSrgb8;
-  storage_description_ = "8-bit sRGB";
-  if (capabilities.canRenderHalfFloat()) {
+  texel_format_ = {GL_RGBA, GL_UNSIGNED_BYTE};
+  if (const std::optional<gles::HalfFloatFormat> half = capabilities.halfFloatRenderFormat()) {
     // The extensions promise it, but only a complete framebuffer proves it.
     std::string why;
-    auto probe = gles::createCubeTexture(4, GL_RGBA, GL_HALF_FLOAT_OES, why);
+    auto probe = gles::createCubeTexture(4, half->internal_format, GL_RGBA, half->type, why);
     GLenum status = GL_NONE;
     if (probe) {
       FramebufferStateGuard guard;
@@ -138,12 +138,14 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
     }
     if (status == GL_FRAMEBUFFER_COMPLETE) {
       storage_ = CubeStorage::kLinearHalfFloat;
-      storage_description_ = "half float";
+      texel_format_ = *half;
+      storage_description_ = "half float (" + capabilities.halfFloatRoute() + ")";
     } else {
-      storage_description_ = "8-bit sRGB (half float render target unusable: " + why + ")";
+      storage_description_ =
+          "8-bit sRGB (half float render target unusable: " + why + "; " + capabilities.halfFloatRoute() + ")";
     }
   } else {
-    storage_description_ = "8-bit sRGB (no OES_texture_half_float + EXT_color_buffer_half_float)";
+    storage_description_ = "8-bit sRGB (" + capabilities.halfFloatRoute() + ")";
   }
 
   const std::string storage_defines = cubeStorageDefines(storage_);
@@ -181,10 +183,10 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
 
   if (!allocate(reflection_, settings.reflection_face_size, error)) return false;
   if (!allocate(prefiltered_, settings.prefilter_face_size, error)) return false;
-  const GLenum texel_type = storage_ == CubeStorage::kLinearHalfFloat ? GL_HALF_FLOAT_OES : GL_UNSIGNED_BYTE;
   for (GpuLatLongMap* map : {&east_latlong_, &north_latlong_}) {
-    auto texture = gles::createTexture2D(2 * settings.intermediate_rows, settings.intermediate_rows, GL_RGBA,
-                                         texel_type, GL_NEAREST, nullptr, error);
+    auto texture = gles::createTexture2D(2 * settings.intermediate_rows, settings.intermediate_rows,
+                                         texel_format_.internal_format, GL_RGBA, texel_format_.type, GL_NEAREST,
+                                         nullptr, error);
     if (!texture) return false;
     map->texture = std::move(*texture);
     map->rows = settings.intermediate_rows;
@@ -222,8 +224,7 @@ bool EnvironmentMaps::init(const gles::Capabilities& capabilities, const Environ
 }
 
 bool EnvironmentMaps::allocate(GpuCubeMap& map, int face_size, std::string& error) const {
-  const GLenum type = storage_ == CubeStorage::kLinearHalfFloat ? GL_HALF_FLOAT_OES : GL_UNSIGNED_BYTE;
-  auto texture = gles::createCubeTexture(face_size, GL_RGBA, type, error);
+  auto texture = gles::createCubeTexture(face_size, texel_format_.internal_format, GL_RGBA, texel_format_.type, error);
   if (!texture) return false;
   map.texture = std::move(*texture);
   map.face_size = face_size;

@@ -206,6 +206,9 @@ class EnvironmentMaps {
 
   EnvironmentMapSettings settings_;
   CubeStorage storage_ = CubeStorage::kSrgb8;
+  // The maps' texels as allocated and uploaded: RGBA bytes, or the half
+  // floats of Capabilities::halfFloatRenderFormat.
+  gles::HalfFloatFormat texel_format_{GL_RGBA, GL_UNSIGNED_BYTE};
   std::string storage_description_;
   gles::Program probe_program_;
   gles::Program prefilter_program_;

@@ -94,7 +94,7 @@ bool EnvironmentMaps::setReflection(const ibl::CubeMapRGB& reflection, std::stri
         for (int c = 0; c < 3; ++c) halves[4 * i + static_cast<size_t>(c)] = floatToHalf(texels[i][c]);
         halves[4 * i + 3] = floatToHalf(alpha(face, i));
       }
-      glTexSubImage2D(target, 0, 0, 0, reflection.face_size, reflection.face_size, GL_RGBA, GL_HALF_FLOAT_OES,
+      glTexSubImage2D(target, 0, 0, 0, reflection.face_size, reflection.face_size, GL_RGBA, texel_format_.type,
                       halves.data());
     }
   }

@@ -60,6 +60,39 @@ void expectAllNumbersFinite(const nlohmann::json& value, const std::string& path
   }
 }
 
+// The maps' storage follows the context the driver gives, read by the
+// probe as on a board: this machine's ES 3.2 and the Pi 4's profile (ES 3.1
+// without EXT_color_buffer_half_float) render RGBA16F through
+// EXT_color_buffer_float; a bare GLES2 context takes the 8-bit path. The
+// profiles are Mesa's own overrides (scripts/gpu-profiles.sh), so the
+// start-up line is the driver's answer, not a mask of ours.
+TEST_F(EndToEnd, MapStorageFollowsTheGpuContext) {
+  const std::string profiles = std::string(PROBELIGHT_TEST_DATA_DIR) + "/../../scripts/gpu-profiles.sh";
+  struct Case {
+    const char* profile;  // empty: this machine's own context
+    const char* version;
+    const char* maps;
+  };
+  for (const Case& context : {Case{"", "OpenGL ES 3.", "maps: half float (RGBA16F: ES 3."},
+                              Case{"pi4", "OpenGL ES 3.1", "maps: half float (RGBA16F: ES 3.1 with EXT_color_buffer_float)"},
+                              Case{"gles2", "OpenGL ES 2.0", "maps: 8-bit (ES 2.0 without OES_texture_half_float"}}) {
+    const std::string name = *context.profile != '\0' ? context.profile : "native";
+    const std::string wrapper =
+        *context.profile != '\0'
+            ? "bash -c 'source " + profiles + " && gpu_profile_export " + context.profile + " && exec \"$@\"' _"
+            : "";
+    const CommandResult result =
+        runWrapped(wrapper, "run --source sim --display headless --frames 3 --save-every 0 --out " + (dir_ / name).string());
+    ASSERT_EQ(result.exit_status, 0) << name << ": " << result.stderr_text;
+    EXPECT_NE(result.stderr_text.find(context.version), std::string::npos) << name << ": " << result.stderr_text;
+    EXPECT_NE(result.stderr_text.find(context.maps), std::string::npos) << name << ": " << result.stderr_text;
+    if (std::string(context.profile) == "pi4")
+      EXPECT_NE(result.stderr_text.find("-cb_half_float"), std::string::npos) << result.stderr_text;
+    const nlohmann::json report = readReport(dir_ / name);
+    expectAllNumbersFinite(report["accuracy"], "accuracy");
+  }
+}
+
 TEST_F(EndToEnd, SimulatedRunDrawsTheObjectWhereTheTagSays) {
   const fs::path out = dir_ / "out";
   // 24: the start-up fit (frame 4) takes an exposure bracket of the

@@ -210,5 +210,60 @@ TEST(ExtensionList, MatchesWholeNamesOnly) {
   EXPECT_TRUE(hasExtension("GL_OES_texture_half_float_linear GL_OES_texture_half_float", "GL_OES_texture_half_float"));
 }
 
+// GL_VERSION as GLES gives it ("OpenGL ES N.M vendor"); anything else
+// leaves the GLES2 defaults.
+TEST(GlesVersion, ReadsMajorAndMinorFromTheVersionString) {
+  int major = 2, minor = 0;
+  EXPECT_TRUE(parseGlesVersion("OpenGL ES 3.2 Mesa 22.3.6", major, minor));
+  EXPECT_EQ(major, 3);
+  EXPECT_EQ(minor, 2);
+  EXPECT_TRUE(parseGlesVersion("OpenGL ES 2.0 V3D 4.2", major, minor));
+  EXPECT_EQ(major, 2);
+  EXPECT_EQ(minor, 0);
+  for (const char* not_gles : {"4.6 (Core Profile) Mesa 22.3.6", "OpenGL ES", "OpenGL ES 3", "OpenGL ES x.1", ""}) {
+    major = 7;
+    minor = 7;
+    EXPECT_FALSE(parseGlesVersion(not_gles, major, minor)) << not_gles;
+    EXPECT_EQ(major, 7) << not_gles;
+    EXPECT_EQ(minor, 7) << not_gles;
+  }
+}
+
+// The half-float route for each context the kiosk meets: ES 3 with
+// EXT_color_buffer_float takes sized RGBA16F and ES 3's GL_HALF_FLOAT (V3D
+// has no EXT_color_buffer_half_float); ES 2 needs both OES extensions and
+// takes the unsized GL_RGBA with GL_HALF_FLOAT_OES; else none, saying
+// which extension is missing.
+TEST(HalfFloatRoute, FollowsTheContextsVersionAndExtensions) {
+  Capabilities pi4;
+  pi4.gles_major_version = 3;
+  pi4.gles_minor_version = 1;
+  pi4.texture_half_float = true;
+  pi4.color_buffer_float = true;
+  ASSERT_TRUE(pi4.halfFloatRenderFormat().has_value());
+  EXPECT_EQ(pi4.halfFloatRenderFormat()->internal_format, kGlRgba16f);
+  EXPECT_EQ(pi4.halfFloatRenderFormat()->type, kGlHalfFloat);
+  EXPECT_EQ(pi4.halfFloatRoute(), "RGBA16F: ES 3.1 with EXT_color_buffer_float");
+
+  Capabilities es2 = pi4;
+  es2.gles_major_version = 2;
+  es2.gles_minor_version = 0;
+  EXPECT_FALSE(es2.canRenderHalfFloat()) << "EXT_color_buffer_float is an ES 3 extension";
+  EXPECT_EQ(es2.halfFloatRoute(), "ES 2.0 without EXT_color_buffer_half_float");
+  es2.color_buffer_half_float = true;
+  ASSERT_TRUE(es2.halfFloatRenderFormat().has_value());
+  EXPECT_EQ(es2.halfFloatRenderFormat()->internal_format, GL_RGBA);
+  EXPECT_EQ(es2.halfFloatRenderFormat()->type, static_cast<GLenum>(GL_HALF_FLOAT_OES));
+
+  Capabilities es3_without = pi4;
+  es3_without.color_buffer_float = false;
+  es3_without.texture_half_float = false;
+  EXPECT_FALSE(es3_without.canRenderHalfFloat());
+  EXPECT_EQ(es3_without.halfFloatRoute(),
+            "ES 3.1 without EXT_color_buffer_float, OES_texture_half_float, EXT_color_buffer_half_float");
+  EXPECT_FALSE(pi4.withoutExtensions().canRenderHalfFloat());
+  EXPECT_EQ(pi4.withoutExtensions().gles_major_version, 2);
+}
+
 }  // namespace
 }  // namespace probelight::gles
