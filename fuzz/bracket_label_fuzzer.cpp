@@ -1,6 +1,8 @@
 // --bracket FILE@EV, the label of one bracket frame: the file and a finite
 // EV within 0.125..24 stops; or a recorded frame's file alone (its EV from
 // its metadata, later); or one UsageError line.
+#include <algorithm>
+
 #include "app/command_line.hpp"
 #include "capture/frame_recording.hpp"
 #include "fuzz/fuzz_input.hpp"

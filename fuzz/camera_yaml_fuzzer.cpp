@@ -1,5 +1,7 @@
 // camera.yaml (config::loadCameraFile): any bytes give intrinsics within the
 // documented bounds, or one ConfigError line naming the file.
+#include <algorithm>
+
 #include "config/camera_file.hpp"
 #include "fuzz/fuzz_input.hpp"
 

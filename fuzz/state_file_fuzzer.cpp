@@ -1,5 +1,7 @@
 // The kiosk's stored lighting (<state>/lighting.json, loadLighting): lights
 // within the documented bounds, or nothing with one line naming the file.
+#include <algorithm>
+
 #include "fuzz/fuzz_input.hpp"
 #include "stages/state_store.hpp"
 

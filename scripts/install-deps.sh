@@ -1,7 +1,17 @@
 #!/usr/bin/env bash
-# Installs the Debian bookworm packages probelight builds and tests with,
-# skipping those already present. Uses sudo when not root.
+# Installs the Debian packages probelight builds and tests with, on Debian 12
+# (bookworm) or 13 (trixie), skipping those already present. Uses sudo when
+# not root.
 set -euo pipefail
+
+# The sanitizers' and libFuzzer's runtime ships with the distribution's
+# default clang, whose major version the package's name carries.
+codename=$(. /etc/os-release && echo "${VERSION_CODENAME:-}")
+case "$codename" in
+  bookworm) clang_runtime=libclang-rt-14-dev ;;
+  trixie) clang_runtime=libclang-rt-19-dev ;;
+  *) echo "probelight: Debian 12 (bookworm) or 13 (trixie) expected, this is '${codename:-unknown}'" >&2; exit 1 ;;
+esac
 
 packages=(
   # toolchain
@@ -28,7 +38,7 @@ packages=(
   # Debian's package checker, run on the .deb by scripts/check-package.sh
   lintian
   # the sanitizer build and the libFuzzer targets (scripts/test-sanitizers.sh)
-  clang libclang-rt-14-dev
+  clang "$clang_runtime"
 )
 
 missing=()

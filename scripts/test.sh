@@ -20,6 +20,8 @@ case "${1:-}" in
   --quick) tiers=(unit gpu gpu@pi4 gpu@gles2) ;;
   *) echo "usage: scripts/test.sh [--quick]" >&2; exit 2 ;;
 esac
+# PROBELIGHT_TEST_TIERS="unit gpu ...": those tiers only (scripts/debian13-check).
+[[ -n ${PROBELIGHT_TEST_TIERS:-} ]] && read -ra tiers <<<"$PROBELIGHT_TEST_TIERS"
 # PROBELIGHT_TIMES=FILE (.ci/run's time table): each step's "NAME SECONDS STATUS" appended.
 record() {
   [[ -n ${PROBELIGHT_TIMES:-} ]] && printf '%s\t%s\t%s\n' "$1" "$2" "$3" >>"$PROBELIGHT_TIMES"
@@ -27,7 +29,7 @@ record() {
 }
 start=$(date +%s)
 scripts/install-deps.sh
-bench=ON
+bench=${PROBELIGHT_BUILD_BENCH:-ON}
 [[ ${CI:-} == true ]] && bench=OFF
 PROBELIGHT_BUILD_BENCH=$bench scripts/build.sh
 record "test.sh: install and build" "$(($(date +%s) - start))" 0

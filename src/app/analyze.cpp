@@ -1,5 +1,6 @@
 #include "app/analyze.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>

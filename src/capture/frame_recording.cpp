@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <stdexcept>
+#include <string_view>
 #include <system_error>
 
 #include <nlohmann/json.hpp>
@@ -45,9 +46,12 @@ struct FieldError : std::runtime_error {
 };
 
 // `prefix` names the object the field is in ("planes[1]."), for the message.
-const Json& member(const Json& object, const char* key, const std::string& prefix = "") {
+// A view, not a const std::string&: these return references into `object`,
+// and a defaulted string argument is a temporary that GCC 14's
+// -Wdangling-reference takes for what the reference might point into.
+const Json& member(const Json& object, const char* key, std::string_view prefix = {}) {
   const auto found = object.find(key);
-  if (found == object.end()) throw FieldError(prefix + key, "missing");
+  if (found == object.end()) throw FieldError(std::string(prefix) + key, "missing");
   return *found;
 }
 
@@ -75,8 +79,8 @@ long long integer(const Json& object, const char* key, long long low, long long 
   return x;
 }
 
-const std::string& text(const Json& object, const char* key, const std::string& prefix = "") {
-  const std::string field = prefix + key;
+const std::string& text(const Json& object, const char* key, std::string_view prefix = {}) {
+  const std::string field = std::string(prefix) + key;
   const Json& value = member(object, key, prefix);
   if (!value.is_string()) throw FieldError(field, "not a string");
   return value.get_ref<const std::string&>();

@@ -71,6 +71,39 @@ bool readFileForTinyGltf(std::vector<unsigned char>* bytes, std::string* error, 
 
 bool writeNothing(std::string*, const std::string&, const std::vector<unsigned char>&, void*) { return false; }
 
+// tinygltf 2.9 (Debian 13) asks a file's size before reading it, through a
+// callback 2.8 (Debian 12) does not have (hence maybe_unused there), and
+// calls it unchecked. Only a regular file gets a size, so a FIFO or a
+// device is refused before it is opened; readFileForTinyGltf still checks
+// the bytes it reads.
+[[maybe_unused]] bool fileSizeForTinyGltf(std::size_t* size_bytes, std::string* error, const std::string& path, void*) {
+  std::error_code failed;
+  const auto status = fs::status(path, failed);
+  const auto size = !failed && fs::is_regular_file(status) ? fs::file_size(path, failed) : std::uintmax_t{0};
+  if (failed || !fs::is_regular_file(status)) {
+    if (error) *error += path + ": not a regular file that can be read\n";
+    return false;
+  }
+  *size_bytes = static_cast<std::size_t>(size);
+  return true;
+}
+
+// The callbacks written field by field: 2.9 added a field between
+// WriteWholeFile and user_data, so a braced list would put the user data
+// into it. A template, so that the member's absence in 2.8 discards the
+// statement instead of failing to compile.
+template <typename Callbacks>
+Callbacks fileCallbacks(LoadContext& context) {
+  Callbacks callbacks{};
+  callbacks.FileExists = fileExists;
+  callbacks.ExpandFilePath = keepPath;
+  callbacks.ReadWholeFile = readFileForTinyGltf;
+  callbacks.WriteWholeFile = writeNothing;
+  if constexpr (requires { callbacks.GetFileSizeInBytes; }) callbacks.GetFileSizeInBytes = fileSizeForTinyGltf;
+  callbacks.user_data = &context;
+  return callbacks;
+}
+
 // Decodes one texture image to RGBA8 with OpenCV, after the header checks
 // camera frames get; counts it against the model's size.
 bool decodeTextureImage(tinygltf::Image* image, const int index, std::string* error, std::string*, int, int,
@@ -821,7 +854,7 @@ bool loadGltfModel(const std::string& path, const ModelLimits& limits, MeshModel
   LoadContext context{limits, 0};
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(decodeTextureImage, &context);
-  loader.SetFsCallbacks({fileExists, keepPath, readFileForTinyGltf, writeNothing, &context});
+  loader.SetFsCallbacks(fileCallbacks<tinygltf::FsCallbacks>(context));
   tinygltf::Model gltf;
   std::string gltf_error, gltf_warning;
   const std::string base_dir = fs::path(path).parent_path().string();

@@ -1,6 +1,7 @@
 // EnvironmentMaps' maps to and from the CPU: read back (tests, the truth
 // monitor, the lighting fit, SH9's projection) and set from a CPU map (the
 // benches and the GPU tests' inputs), in either storage.
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <vector>

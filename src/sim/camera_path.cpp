@@ -1,5 +1,6 @@
 #include "sim/camera_path.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 

@@ -12,6 +12,7 @@
 // pipeline's error, not the noise of one frame.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>

@@ -10,6 +10,7 @@
 // averaged over the same pixels' normals). On average 1.5%.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>

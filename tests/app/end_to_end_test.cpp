@@ -86,8 +86,9 @@ TEST_F(EndToEnd, MapStorageFollowsTheGpuContext) {
     ASSERT_EQ(result.exit_status, 0) << name << ": " << result.stderr_text;
     EXPECT_NE(result.stderr_text.find(context.version), std::string::npos) << name << ": " << result.stderr_text;
     EXPECT_NE(result.stderr_text.find(context.maps), std::string::npos) << name << ": " << result.stderr_text;
-    if (std::string(context.profile) == "pi4")
+    if (std::string(context.profile) == "pi4") {
       EXPECT_NE(result.stderr_text.find("-cb_half_float"), std::string::npos) << result.stderr_text;
+    }
     const nlohmann::json report = readReport(dir_ / name);
     expectAllNumbersFinite(report["accuracy"], "accuracy");
   }

@@ -2,6 +2,7 @@
 // with a bounded queue, and a failed write is reported, not lost.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>

@@ -6,6 +6,7 @@
 // a bad recording, flag or a full card is one line and loses nothing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>

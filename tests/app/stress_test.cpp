@@ -6,6 +6,7 @@
 // why on screen, and keep the last good maps.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>

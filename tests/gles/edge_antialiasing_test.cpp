@@ -1,6 +1,7 @@
 // passes::chooseEdgeAntialiasing: which way the model's edges are smoothed
 // for a GPU's capabilities, a framebuffer and a requested sample count. Pure:
 // no context needed.
+#include <algorithm>
 #include <cmath>
 #include <random>
 

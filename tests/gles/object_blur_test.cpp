@@ -5,6 +5,7 @@
 // the same way: a blurred step fitted across the edge, its 10-90% width.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>

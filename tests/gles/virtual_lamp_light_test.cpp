@@ -15,6 +15,7 @@
 // background), with the lamp at intensity 0.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 

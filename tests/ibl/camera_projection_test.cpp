@@ -4,6 +4,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include <algorithm>
 #include <iostream>
 #include <vector>
 

@@ -5,6 +5,7 @@
 // (The border and the post on real frames: tests/app analyze and accuracy.)
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>

@@ -2,6 +2,7 @@
 // views, against radiance this file knows exactly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 

@@ -3,6 +3,7 @@
 // the planar projection that casts the object's shadow from it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "ibl/color_transfer.hpp"

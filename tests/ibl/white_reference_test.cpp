@@ -3,6 +3,7 @@
 // an 8-bit camera clips.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 

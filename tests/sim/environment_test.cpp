@@ -1,6 +1,7 @@
 // Environment names, lat-long files and bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>

@@ -4,6 +4,7 @@
 // texture lookup against the decoded texels of a corpus model.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>

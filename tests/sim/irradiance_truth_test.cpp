@@ -2,6 +2,7 @@
 // its hdr and clipped variants.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/math_constants.hpp"

@@ -4,6 +4,7 @@
 // importance sampling, shadow rays and multiple importance sampling).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -5,6 +5,7 @@
 // with closest hits; degenerate triangles; the attributes a hit carries.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -5,6 +5,7 @@
 // constant.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 

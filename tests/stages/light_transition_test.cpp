@@ -1,5 +1,6 @@
 // Lights move to a new fit over the fade time without a pop: synthetic
 // sequences of fits against the frame-by-frame change of what is shown.
+#include <algorithm>
 #include <cmath>
 #include <vector>
 

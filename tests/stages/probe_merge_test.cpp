@@ -3,6 +3,7 @@
 // highlights for the fit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "../ibl/ibl_test_helpers.hpp"

@@ -3,6 +3,7 @@
 // sRGB encoding) and then rounds to 8 bits.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 

@@ -1,4 +1,5 @@
 // camera.yaml, rig.yaml and the typed reader behind them.
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
