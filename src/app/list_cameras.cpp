@@ -15,11 +15,12 @@ int runListCameras(const CamerasOptions&, std::ostream& out, std::ostream& err) 
   // libcamera 0.4 and later also log "Could not open any dma-buf provider"
   // as an ERROR where the machine has neither /dev/dma_heap nor
   // /dev/udmabuf (a laptop, a VM); the listing needs neither, so there that
-  // category keeps only its fatal messages.
+  // category keeps only its fatal messages. It comes first: libcamera 0.4
+  // takes the first pattern that matches a category.
   std::error_code ignored;
   const bool dma_buf_provider =
       std::filesystem::exists("/dev/dma_heap", ignored) || std::filesystem::exists("/dev/udmabuf", ignored);
-  ::setenv("LIBCAMERA_LOG_LEVELS", dma_buf_provider ? "*:ERROR" : "*:ERROR,DmaBufAllocator:FATAL", 0);
+  ::setenv("LIBCAMERA_LOG_LEVELS", dma_buf_provider ? "*:ERROR" : "DmaBufAllocator:FATAL,*:ERROR", 0);
   std::string error;
   const auto cameras = listLibcameraCameras(error);
   if (!cameras) {
