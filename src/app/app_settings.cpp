@@ -285,6 +285,7 @@ AppSettings loadAppSettings(const std::string& path) {
   settings.sim.white_balance_shift_blue =
       sim.readDouble("white_balance_shift_blue", settings.sim.white_balance_shift_blue, Range::closed(0.125, 8.0));
   settings.sim.motion_blur = sim.readBool("motion_blur", settings.sim.motion_blur);
+  settings.sim.lens_control = sim.readBool("lens_control", settings.sim.lens_control);
   settings.sim.camera_buffers = sim.readInt("camera_buffers", settings.sim.camera_buffers, Range::closed(2, 16));
   sim.rejectUnknownFields();
 

@@ -68,6 +68,11 @@ struct SimConfig {
   // The simulated shutter stays open for each frame's exposure time while
   // the camera moves: motion blur (SimCameraOptions::motion_blur).
   bool motion_blur = false;
+  // The simulated camera has a lens it can focus (as the Camera Module 3):
+  // camera.yaml's lens_position_dioptres is set, and every frame's metadata
+  // says where the lens is (SimCameraOptions::lens_control). false: a
+  // fixed-focus camera, as vimc.
+  bool lens_control = false;
   // Buffers in the simulated camera's pool: an exposure change reaches the
   // frames from this many after the newest one handed out (its latency, as
   // a real pipeline's queued requests give one).

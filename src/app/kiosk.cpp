@@ -384,6 +384,9 @@ class Kiosk {
     log_ << "probelight: " << display_->describe() << ": " << capabilities_.summary() << "\n";
     if (!source_->streamDescription().empty())
       log_ << "probelight: " << source_->name() << ": " << source_->streamDescription() << "\n";
+    // Once, at the first start: a reconnect meets the same camera.
+    if (const std::string warning = source_->focusWarning(); !warning.empty())
+      log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << warning << "\n";
     lights_->loadStoredLighting();
     if (const std::string warning = maps_->loadStoredProbe(settings.state.dir); !warning.empty())
       log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << warning << "; starting without it\n";
@@ -403,6 +406,7 @@ class Kiosk {
       camera.width_px = inputs_.camera.width_px;  // the calibrated size
       camera.height_px = inputs_.camera.height_px;
       camera.pixel_format = settings.camera.pixel_format;
+      camera.lens_position_dioptres = inputs_.camera.lens_position_dioptres;
       source_ = std::make_unique<LibcameraSource>(camera);
     } else {
       PROBELIGHT_TRY(makeSimulatedCamera());
@@ -499,6 +503,8 @@ class Kiosk {
     camera_options.white_balance_shift_red = settings.sim.white_balance_shift_red;
     camera_options.white_balance_shift_blue = settings.sim.white_balance_shift_blue;
     camera_options.motion_blur = settings.sim.motion_blur;
+    camera_options.lens_position_dioptres = inputs_.camera.lens_position_dioptres;
+    camera_options.lens_control = settings.sim.lens_control;
     source_ = std::make_unique<SimFrameSource>(world_, frameLimit(), settings.sim.camera_buffers, camera_options);
     return Status::ok();
   }

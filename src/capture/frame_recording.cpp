@@ -325,6 +325,7 @@ bool writeRecordedFrame(const std::string& dir, const std::string& stem, const R
                {"red_gain", frame.metadata.red_gain},
                {"blue_gain", frame.metadata.blue_gain},
                {"origin", frame.metadata.origin}};
+  if (frame.metadata.lens_position_dioptres) json["lens_position_dioptres"] = *frame.metadata.lens_position_dioptres;
   if (frame.metadata.truth) json["truth"] = truthJson(*frame.metadata.truth);
   if (isYuv(frame.layout))
     json["ycbcr"] = {{"matrix", matrixName(frame.encoding.matrix)}, {"range", frame.encoding.full_range ? "full" : "limited"}};
@@ -431,6 +432,11 @@ Status readRecordedFrame(const std::string& path, FrameBuffer& frame) {
     // The white balance's gains (recordings before them say none: 0, unknown).
     const double red_gain = json.contains("red_gain") ? number(json, "red_gain", 0.0, kMaxColourGain) : 0.0;
     const double blue_gain = json.contains("blue_gain") ? number(json, "blue_gain", 0.0, kMaxColourGain) : 0.0;
+    // Where the lens was; absent in recordings made before it was kept and
+    // of cameras without a lens control.
+    std::optional<double> lens_position_dioptres;
+    if (json.contains("lens_position_dioptres"))
+      lens_position_dioptres = number(json, "lens_position_dioptres", 0.0, kMaxLensPositionDioptres);
     std::optional<FrameTruth> truth;
     if (json.contains("truth")) truth = readTruth(json["truth"]);
     raw_name = text(json, "raw");
@@ -451,6 +457,7 @@ Status readRecordedFrame(const std::string& path, FrameBuffer& frame) {
     frame.metadata.analogue_gain = analogue_gain;
     frame.metadata.red_gain = red_gain;
     frame.metadata.blue_gain = blue_gain;
+    frame.metadata.lens_position_dioptres = lens_position_dioptres;
     frame.metadata.origin = json_path.string();
     frame.metadata.truth = truth;
     frame.width_px = width;

@@ -1,9 +1,9 @@
 // A recording of what a camera gave: each frame's bytes exactly as they
 // arrived (its planes at their own strides, Y'CbCr or packed RGB, before any
-// conversion) and its metadata (exposure, gain, timestamp, format), so that
-// a session on the board can be replayed frame for frame on a desktop
-// (RecordingFrameSource), brackets included, and any one frame analysed
-// (`probelight analyze --frame DIR/frame_000123.json`).
+// conversion) and its metadata (exposure, gain, lens position, timestamp,
+// format), so that a session on the board can be replayed frame for frame on
+// a desktop (RecordingFrameSource), brackets included, and any one frame
+// analysed (`probelight analyze --frame DIR/frame_000123.json`).
 //
 // A recording folder holds:
 //   recording.json           what made it (RecordingHeader)

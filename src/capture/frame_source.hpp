@@ -31,6 +31,11 @@ struct FrameMetadata {
   // libcamera's ColourGains: 0 when unknown.
   double red_gain = 0.0;
   double blue_gain = 0.0;
+  // Where the lens was focused (dioptres: 1 / distance in metres, 0 at
+  // infinity; libcamera's LensPosition), within [0,
+  // kMaxLensPositionDioptres]; nullopt when the camera has no lens control
+  // or did not say.
+  std::optional<double> lens_position_dioptres;
   std::string origin;           // file name or "sim:<index>", for messages
   std::optional<FrameTruth> truth;
 };
@@ -186,6 +191,10 @@ class FrameSource : public ExposureControl {
   // settings ask (a pixel format or size the camera does not offer): a
   // configuration problem that trying again will not fix.
   virtual bool refusedItsSettings() const { return false; }
+  // After a start(): one line where camera.yaml's lens position could not
+  // be set as written (capture/lens_focus_choice.hpp), for the log; empty
+  // otherwise and for sources with no camera (files, recordings).
+  virtual std::string focusWarning() const { return ""; }
   // lockExposure, setExposureLadder and shortestExposureUs: ExposureControl's,
   // false or nothing where the source has no such controls.
 };

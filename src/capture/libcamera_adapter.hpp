@@ -16,6 +16,7 @@
 #include <libcamera/stream.h>
 #include <libcamera/version.h>
 
+#include "capture/lens_focus_choice.hpp"
 #include "core/ycbcr.hpp"
 
 namespace probelight::libcamera_adapter {
@@ -92,6 +93,30 @@ inline std::optional<double> exposureTimeMinUs(const libcamera::Camera& camera) 
 inline bool hasExposureTimeControl(const libcamera::Camera& camera) {
   const libcamera::ControlInfoMap& info = camera.controls();
   return info.find(libcamera::controls::ExposureTime.id()) != info.end();
+}
+
+// What the camera offers for its lens. AfMode (int32) and LensPosition
+// (float, dioptres) are in libcamera's core controls from 0.0.3 on, with
+// the same types.
+inline LensControlsOffered lensControlsOffered(const libcamera::Camera& camera) {
+  const libcamera::ControlInfoMap& info = camera.controls();
+  LensControlsOffered offered;
+  offered.af_mode = info.find(libcamera::controls::AfMode.id()) != info.end();
+  const auto position = info.find(libcamera::controls::LensPosition.id());
+  offered.lens_position = position != info.end();
+  if (offered.lens_position && position->second.min().type() == libcamera::ControlTypeFloat &&
+      position->second.max().type() == libcamera::ControlTypeFloat) {
+    offered.min_dioptres = position->second.min().get<float>();
+    offered.max_dioptres = position->second.max().get<float>();
+  }
+  return offered;
+}
+
+// The focus controls `focus` asks for; none when it asks for none.
+inline void setFocus(libcamera::ControlList& controls, const FocusRequest& focus) {
+  if (!focus.lens_position_dioptres) return;
+  if (focus.af_mode_manual) setIfSupported(controls, libcamera::controls::AfMode, libcamera::controls::AfModeManual);
+  setIfSupported(controls, libcamera::controls::LensPosition, static_cast<float>(*focus.lens_position_dioptres));
 }
 
 // The Y'CbCr encoding of a validated stream. No colour space (old pipeline

@@ -136,6 +136,8 @@ bool LibcameraSource::startCamera(std::string& error) {
     shortest_exposure_us_ = libcamera_adapter::exposureTimeMinUs(*camera_);
     exposure_time_controllable_ = libcamera_adapter::hasExposureTimeControl(*camera_);
   }
+  focus_ = chooseFocusRequest(settings_.lens_position_dioptres, libcamera_adapter::lensControlsOffered(*camera_),
+                              camera_->id());
   std::unique_ptr<libcamera::CameraConfiguration> config = libcamera_adapter::viewfinderConfiguration(*camera_);
   if (!config || config->size() != 1) {
     error = "camera: " + camera_->id() + " offers no viewfinder stream";
@@ -267,7 +269,9 @@ bool LibcameraSource::startCamera(std::string& error) {
     }
     completed_changed_.notify_all();
   });
-  if (camera_->start() != 0) {
+  libcamera::ControlList start_controls(camera_->controls());
+  libcamera_adapter::setFocus(start_controls, focus_);
+  if (camera_->start(&start_controls) != 0) {
     error = "camera: " + camera_->id() + " did not start streaming";
     return false;
   }
@@ -278,6 +282,7 @@ bool LibcameraSource::startCamera(std::string& error) {
   }
   for (const std::unique_ptr<Slot>& slot : slots_) {
     addExposureControls(slot->request.get());
+    libcamera_adapter::setFocus(slot->request->controls(), focus_);
     if (camera_->queueRequest(slot->request.get()) != 0) {
       error = "camera: cannot queue a capture request";
       return false;
@@ -408,6 +413,12 @@ FrameWait LibcameraSource::waitFrame(std::chrono::milliseconds timeout, FrameLea
   if (auto timestamp = metadata.get(libcamera::controls::SensorTimestamp)) frame.metadata.timestamp_ns = *timestamp;
   if (auto exposure = metadata.get(libcamera::controls::ExposureTime)) frame.metadata.exposure_us = *exposure;
   if (auto gain = metadata.get(libcamera::controls::AnalogueGain)) frame.metadata.analogue_gain = *gain;
+  // Where the lens was (a camera with a lens reports it whether or not it
+  // was asked to hold it); a value no lens reaches is left unknown, so that
+  // a recording of it stays readable.
+  if (auto lens = metadata.get(libcamera::controls::LensPosition);
+      lens && *lens >= 0.0f && *lens <= kMaxLensPositionDioptres)
+    frame.metadata.lens_position_dioptres = *lens;
   // The white balance's gains on red and blue: the object follows them as
   // it follows the exposure (stages/camera_response_follower.hpp).
   if (auto colour_gains = metadata.get(libcamera::controls::ColourGains)) {

@@ -11,6 +11,12 @@
 // handed out and the older ones go straight back (lowest latency), except
 // during an exposure bracket, whose frames are all handed out in order.
 //
+// Focus: camera.yaml's lens position, where it names one, goes in the start
+// controls and the first request of each buffer (pipelines that ignore
+// start controls still take it); the pipeline keeps it until another
+// value is sent (the Pi's IPA does), so later requests carry none. Each
+// frame's lens position comes in its metadata.
+//
 // Exposure: lockExposure(true) freezes auto exposure and white balance at
 // their current values (the lights are being fitted from the ball's image);
 // each frame's exposure time and gain come in its metadata.
@@ -30,6 +36,7 @@
 #include "capture/camera_format_choice.hpp"
 #include "capture/exposure_sequencer.hpp"
 #include "capture/frame_source.hpp"
+#include "capture/lens_focus_choice.hpp"
 
 namespace libcamera {
 class Camera;
@@ -49,6 +56,10 @@ struct LibcameraSettings {
   // probelight.yaml's camera.pixel_format: "auto" (the cheapest format the
   // camera offers; capture/camera_format_choice.hpp) or one by name.
   std::string pixel_format = "auto";
+  // camera.yaml's lens_position_dioptres: the focus its intrinsics hold at,
+  // set with autofocus off where the camera can drive its lens
+  // (capture/lens_focus_choice.hpp). nullopt: the camera's own focus.
+  std::optional<double> lens_position_dioptres;
 };
 
 class LibcameraSource final : public FrameSource {
@@ -77,6 +88,7 @@ class LibcameraSource final : public FrameSource {
   // (stride 5760)", for the log and the run report.
   std::string streamDescription() const override;
   bool refusedItsSettings() const override { return settings_refused_; }
+  std::string focusWarning() const override { return focus_.warning; }
 
  private:
   struct Slot;
@@ -101,6 +113,7 @@ class LibcameraSource final : public FrameSource {
   CameraFormat format_ = CameraFormat::kYuv420;
   bool exposure_time_controllable_ = true;  // guarded by mutex_
   bool settings_refused_ = false;
+  FocusRequest focus_;  // chosen at each start from the camera's controls
   std::string stream_description_;
   std::uint64_t undecodable_frames_ = 0;
   std::vector<std::unique_ptr<Slot>> slots_;

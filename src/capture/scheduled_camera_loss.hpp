@@ -32,6 +32,7 @@ class ScheduledCameraLoss : public FrameSource {
   }
   std::optional<double> shortestExposureUs() const override { return inner_->shortestExposureUs(); }
   bool takesExposureLadders() const override { return inner_->takesExposureLadders(); }
+  std::string focusWarning() const override { return inner_->focusWarning(); }
 
   std::uint64_t lossesInjected() const { return losses_; }
 

@@ -87,6 +87,10 @@ bool SimFrameSource::prepare(std::string& error) {
     }
     came_back_ = true;
   }
+  // Before the producer's thread starts, which reads it.
+  LensControlsOffered offered;
+  if (options_.lens_control) offered = {true, true, 0.0, kSimLensMaxDioptres};
+  focus_ = chooseFocusRequest(options_.lens_position_dioptres, offered, name());
   return true;
 }
 
@@ -154,6 +158,8 @@ ThreadedFrameSource::Produced SimFrameSource::produce(std::uint64_t index, Frame
     buffer.metadata.analogue_gain = exposure.analogue_gain;
     buffer.metadata.red_gain = white_balance.r;
     buffer.metadata.blue_gain = white_balance.b;
+    if (options_.lens_control)
+      buffer.metadata.lens_position_dioptres = focus_.lens_position_dioptres.value_or(options_.lens_own_position_dioptres);
     buffer.metadata.truth = truth;
   } catch (const std::exception& e) {
     error = "sim frame " + std::to_string(index) + ": " + e.what();

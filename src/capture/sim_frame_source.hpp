@@ -11,6 +11,7 @@
 
 #include "capture/exposure_schedule.hpp"
 #include "capture/frame_source.hpp"
+#include "capture/lens_focus_choice.hpp"
 #include "sim/world.hpp"
 
 namespace probelight {
@@ -61,7 +62,22 @@ struct SimCameraOptions {
   // the frame's time (sim::World::render's shutter_frames). false: each
   // frame is an instant.
   bool motion_blur = false;
+  // camera.yaml's lens position, as LibcameraSettings::lens_position_dioptres:
+  // the focus the source is asked to hold; nullopt: none asked.
+  std::optional<double> lens_position_dioptres;
+  // A lens the source can drive (LensPosition and AfMode, as the Camera
+  // Module 3's, over its IMX708's range: kSimLensMaxDioptres): every frame
+  // reports its position, the one asked for or else where its own autofocus
+  // keeps it (lens_own_position_dioptres). false: a fixed-focus camera, whose
+  // frames report none; an asked position is then a warning
+  // (FrameSource::focusWarning). The picture itself stays sharp either way.
+  bool lens_control = false;
+  double lens_own_position_dioptres = 2.0;  // 0.5 m, about where the tag is
 };
+
+// The simulated lens's range, dioptres: libcamera's LensPosition range for
+// the Camera Module 3 (IMX708), 0 (infinity) to 32.
+inline constexpr double kSimLensMaxDioptres = 32.0;
 
 class SimFrameSource : public ThreadedFrameSource {
  public:
@@ -90,6 +106,7 @@ class SimFrameSource : public ThreadedFrameSource {
   bool setExposureLadder(const std::vector<ManualExposure>& per_frame) override;
   std::optional<double> shortestExposureUs() const override;
   bool takesExposureLadders() const override { return options_.exposure_controllable; }
+  std::string focusWarning() const override { return focus_.warning; }
 
  protected:
   bool prepare(std::string& error) override;
@@ -105,6 +122,7 @@ class SimFrameSource : public ThreadedFrameSource {
   bool was_silent_ = false;  // frame silent_at_frame was held back
   bool came_back_ = false;  // ... and a restart brought it back
   int restarts_failed_ = 0;
+  FocusRequest focus_;      // chosen at each start, as LibcameraSource chooses it
   ImageRGB8 rendered_;      // YUV layouts: the picture before encoding
   std::mutex exposure_mutex_;  // set on the render thread, read on the producer's
   ExposureSchedule exposure_schedule_;

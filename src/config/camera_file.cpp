@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace probelight::config {
@@ -55,6 +56,12 @@ void validateCameraIntrinsics(const CameraIntrinsics& camera, const std::string&
     fail("camera_matrix", "principal point (" + formatNumber(camera.cx_px) + ", " + formatNumber(camera.cy_px) +
                               ") is outside the " + std::to_string(camera.width_px) + "x" +
                               std::to_string(camera.height_px) + " image");
+  // 0 is focus at infinity; negative is past infinity, no lens goes there.
+  if (camera.lens_position_dioptres &&
+      !(*camera.lens_position_dioptres >= 0.0 && *camera.lens_position_dioptres <= kMaxLensPositionDioptres))
+    fail("lens_position_dioptres", formatNumber(*camera.lens_position_dioptres) + " is out of range, must be in [0, " +
+                                       formatNumber(kMaxLensPositionDioptres) +
+                                       "] (dioptres: 1 / the focus distance in metres)");
   if (const std::optional<double> fold = radialFoldInsideImage(camera))
     fail("distortion_coefficients",
          "k1, k2, k3 fold the image: the distorted radius stops growing at " + formatNumber(*fold) +
@@ -122,6 +129,13 @@ CameraIntrinsics loadCameraFile(const std::string& path) {
                 "coefficient " + std::to_string(i) + " is non-zero; only k1 k2 p1 p2 k3 are supported");
   for (int i = 0; i < std::min(count, 5); ++i) camera.distortion[static_cast<std::size_t>(i)] = distortion.at<double>(0, i);
 
+  // Optional: files calibrated without a known lens position (a fixed-focus
+  // camera, or OpenCV's own tools) have none. NaN stands for absent alone:
+  // a NaN written in the file is refused as not finite.
+  const double lens_position_dioptres =
+      file.readDouble("lens_position_dioptres", std::numeric_limits<double>::quiet_NaN());
+  if (!std::isnan(lens_position_dioptres)) camera.lens_position_dioptres = lens_position_dioptres;
+
   file.rejectUnknownFields();
   validateCameraIntrinsics(camera, path);
   return camera;
@@ -138,6 +152,7 @@ void saveCameraFile(const std::string& path, const CameraIntrinsics& camera) {
   cv::Mat distortion(1, 5, CV_64F);
   for (int i = 0; i < 5; ++i) distortion.at<double>(0, i) = camera.distortion[static_cast<std::size_t>(i)];
   storage << "distortion_coefficients" << distortion;
+  if (camera.lens_position_dioptres) storage << "lens_position_dioptres" << *camera.lens_position_dioptres;
   storage.release();
 }
 

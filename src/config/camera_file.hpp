@@ -1,5 +1,6 @@
 // camera.yaml: the camera's intrinsics, in the layout OpenCV's calibration
-// tools write (image_width, image_height, camera_matrix, distortion_coefficients).
+// tools write (image_width, image_height, camera_matrix, distortion_coefficients),
+// and optionally the lens position they hold at (lens_position_dioptres).
 #pragma once
 
 #include <optional>

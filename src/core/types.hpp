@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,7 +25,18 @@ struct CameraIntrinsics {
   double cx_px = 319.5;
   double cy_px = 239.5;
   std::array<double, 5> distortion{0, 0, 0, 0, 0};  // k1 k2 p1 p2 k3
+  // The lens position the intrinsics were calibrated at, in dioptres
+  // (1 / focus distance in metres; libcamera's LensPosition): a lens that
+  // focuses elsewhere changes the focal length and distortion. nullopt: not
+  // known, and the camera's own focus is left alone.
+  std::optional<double> lens_position_dioptres;
 };
+
+// The largest lens position accepted (dioptres): 1 cm focus distance, ten
+// times closer than the Camera Module 3 focuses (10 cm; libcamera's
+// LensPosition range for its IMX708 is 0..32). Past it a value is a slip,
+// such as a focus distance in millimetres written for dioptres.
+constexpr double kMaxLensPositionDioptres = 100.0;
 
 // Physical set-up: the marker and the mirror ball. World frame W is the tag's
 // frame: origin at the tag centre, +X toward the right edge of the printed tag

@@ -90,6 +90,7 @@ TEST(AppSettings, BoardFileListsEveryFieldWithTheDefaults) {
   EXPECT_DOUBLE_EQ(from_file.sim.min_exposure_us, defaults.sim.min_exposure_us);
   EXPECT_EQ(from_file.sim.min_exposure_reported, defaults.sim.min_exposure_reported);
   EXPECT_EQ(from_file.sim.camera_buffers, defaults.sim.camera_buffers);
+  EXPECT_EQ(from_file.sim.lens_control, defaults.sim.lens_control);
   EXPECT_EQ(from_file.save_every, defaults.save_every);
   EXPECT_EQ(from_file.gpu_finish, defaults.gpu_finish);
   EXPECT_EQ(from_file.resources_every_frames, defaults.resources_every_frames);

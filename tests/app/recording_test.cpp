@@ -15,6 +15,8 @@
 #include <nlohmann/json.hpp>
 
 #include "binary_test_support.hpp"
+#include "config/camera_file.hpp"
+#include "config/rig_file.hpp"
 #include "sim/scene_config.hpp"
 #include "sim/world.hpp"
 
@@ -210,6 +212,53 @@ TEST_F(Recording, ASimulatedRunReplaysWithItsTruthAndFollowsItsFrames) {
   const nlohmann::json damaged = replay(dir_ / "damaged");
   EXPECT_EQ(damaged["tag_status"]["frames"]["found"], frames - 1);
   EXPECT_NE(damaged["accuracy"], live_report["accuracy"]);
+}
+
+// camera.yaml's lens position (issue 48) through the binary: a simulated
+// camera with a lens (sim.lens_control, as the Camera Module 3) is held
+// there, and every recorded frame and the recording's camera.yaml say so; a
+// camera without one runs on after one warning line; a position no lens can
+// have is one line and exit status 2.
+TEST_F(Recording, CameraYamlsLensPositionIsHeldAndRecordedOrWarnedAbout) {
+  CameraIntrinsics camera;
+  camera.lens_position_dioptres = 2.5;
+  const fs::path camera_file = dir_ / "camera.yaml", rig_file = dir_ / "rig.yaml";
+  config::saveCameraFile(camera_file.string(), camera);
+  config::saveRigFile(rig_file.string(), RigGeometry{});
+  auto runWith = [&](const std::string& name, const std::string& sim_settings) {
+    const fs::path config = dir_ / (name + ".yaml");
+    std::ofstream(config) << "sim:\n" << sim_settings;
+    return run("run --frames 3 --path static --save-every 0 --calibration " + camera_file.string() + " --rig " +
+               rig_file.string() + " --config " + config.string() + " --out " + (dir_ / (name + ".out")).string() +
+               " --record " + (dir_ / (name + ".rec")).string());
+  };
+  const CommandResult with_lens = runWith("lens", "  lens_control: true\n");
+  ASSERT_EQ(with_lens.exit_status, 0) << with_lens.stderr_text;
+  EXPECT_EQ(with_lens.stderr_text.find("lens_position_dioptres"), std::string::npos) << with_lens.stderr_text;
+  const std::vector<fs::path> frames = framesOf(dir_ / "lens.rec");
+  ASSERT_EQ(frames.size(), 3u);
+  for (const fs::path& frame : frames) EXPECT_EQ(readJson(frame)["lens_position_dioptres"], 2.5) << frame;
+  EXPECT_EQ(config::loadCameraFile((dir_ / "lens.rec" / "camera.yaml").string()).lens_position_dioptres, 2.5);
+
+  const CommandResult fixed_focus = runWith("fixed", "  lens_control: false\n");
+  ASSERT_EQ(fixed_focus.exit_status, 0) << fixed_focus.stderr_text;
+  EXPECT_EQ(testing::countOccurrences(fixed_focus.stderr_text, "has no lens control"), 1u) << fixed_focus.stderr_text;
+  EXPECT_NE(fixed_focus.stderr_text.find("warning: camera: sim:"), std::string::npos) << fixed_focus.stderr_text;
+  for (const fs::path& frame : framesOf(dir_ / "fixed.rec"))
+    EXPECT_FALSE(readJson(frame).contains("lens_position_dioptres")) << frame;
+
+  // saveCameraFile refuses to write it: the value is put in by hand.
+  std::string text = fileBytes(camera_file);
+  const std::size_t field_at = text.find("lens_position_dioptres:");
+  ASSERT_NE(field_at, std::string::npos) << text;
+  text.replace(field_at, text.find('\n', field_at) - field_at, "lens_position_dioptres: -2");
+  std::ofstream(camera_file, std::ios::trunc) << text;
+  const CommandResult bad = runWith("bad", "  lens_control: true\n");
+  EXPECT_EQ(bad.exit_status, 2) << bad.stderr_text;
+  EXPECT_EQ(testing::countOccurrences(bad.stderr_text, "\n"), 1u) << bad.stderr_text;
+  EXPECT_NE(bad.stderr_text.find(camera_file.string() + ": field 'lens_position_dioptres': -2 is out of range"),
+            std::string::npos)
+      << bad.stderr_text;
 }
 
 TEST_F(Recording, BadRecordingsAndFlagsAreOneLineAndLoseNothing) {

@@ -249,6 +249,40 @@ TEST_F(FrameRecording, DamagedFramesAreOneLineNamingTheFileAndTheField) {
   EXPECT_NE(status.message().find("says its planes hold 288"), std::string::npos) << status.message();
 }
 
+// Where the lens was focused (issue 48) is kept with each frame; a frame
+// without it (a fixed-focus camera, or a recording made before it was kept)
+// still loads, its lens position unknown.
+TEST_F(FrameRecording, TheLensPositionIsKeptAndFramesWithoutItStillLoad) {
+  const std::string path = writeOne();
+  FrameBuffer frame;
+  ASSERT_TRUE(readRecordedFrame(path, frame).isOk());
+  EXPECT_FALSE(frame.metadata.lens_position_dioptres.has_value());
+  EXPECT_FALSE(readJson(path).contains("lens_position_dioptres"));
+
+  FrameBuffer focused;
+  encodeSimFrame(randomImage(16, 12, 4), PixelLayout::kNv12, focused);
+  // 3 + 53/1024: exact in a float (libcamera's LensPosition) and in JSON, so compared exactly.
+  focused.metadata.lens_position_dioptres = 3.0517578125;
+  std::string error;
+  ASSERT_TRUE(writeRecordedFrame(dir_.string(), recordedFrameStem(1), copyFrameForRecording(focused), error)) << error;
+  const std::string focused_path = (dir_ / "frame_000001.json").string();
+  ASSERT_TRUE(readRecordedFrame(focused_path, frame).isOk());
+  EXPECT_EQ(frame.metadata.lens_position_dioptres, 3.0517578125);
+
+  const nlohmann::json good = readJson(focused_path);
+  for (const auto& [value, expected] : std::vector<std::pair<nlohmann::json, std::string>>{
+           {-0.5, "field 'lens_position_dioptres': -0.5 is outside [0.0, 100.0]"},
+           {1000.0, "field 'lens_position_dioptres': 1000.0 is outside [0.0, 100.0]"},
+           {"near", "field 'lens_position_dioptres': not a number"}}) {
+    nlohmann::json damaged = good;
+    damaged["lens_position_dioptres"] = value;
+    writeJson(focused_path, damaged);
+    const Status status = readRecordedFrame(focused_path, frame);
+    ASSERT_EQ(status.kind(), Status::Kind::kBadInput) << value;
+    EXPECT_EQ(status.message(), focused_path + ": " + expected);
+  }
+}
+
 TEST_F(FrameRecording, ADamagedHeaderIsOneLineNamingTheField) {
   RecordingHeader header;
   FrameBuffer unused;

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "capture/sim_frame_source.hpp"
@@ -109,6 +111,51 @@ TEST(SimFrameSource, AnExposureLadderArrivesOneRungAFrameAfterThePoolsLatency) {
   options.min_exposure_reported = false;
   EXPECT_FALSE(SimFrameSource(world, 1, 3, options).shortestExposureUs().has_value());
   source.stop();
+}
+
+// The simulated lens (issue 48), as the libcamera source drives a Camera
+// Module 3's: held at camera.yaml's position and saying so in every frame;
+// left to its own focus when the file names none; and a camera without a
+// lens runs on with one warning.
+std::vector<std::optional<double>> lensPositionsOf(SimFrameSource& source, int frames) {
+  std::vector<std::optional<double>> positions;
+  std::string error;
+  EXPECT_TRUE(source.start(error)) << error;
+  for (int i = 0; i < frames; ++i) {
+    FrameLease lease;
+    EXPECT_EQ(source.waitFrame(5s, lease), FrameWait::kFrame) << i;
+    if (lease) positions.push_back(lease->metadata.lens_position_dioptres);
+  }
+  return positions;
+}
+
+TEST(SimFrameSource, ALensIsHeldAtCameraYamlsPositionAndEveryFrameSaysSo) {
+  const auto world = smallWorld();
+  SimCameraOptions options;
+  options.lens_control = true;
+  options.lens_position_dioptres = 3.25;
+  SimFrameSource held(world, 3, 3, options);
+  EXPECT_EQ(lensPositionsOf(held, 3), (std::vector<std::optional<double>>(3, 3.25)));
+  EXPECT_EQ(held.focusWarning(), "");
+
+  // No position asked: no focus control, the lens stays where its own
+  // autofocus keeps it.
+  options.lens_position_dioptres.reset();
+  SimFrameSource own(world, 2, 3, options);
+  EXPECT_EQ(lensPositionsOf(own, 2), (std::vector<std::optional<double>>(2, options.lens_own_position_dioptres)));
+  EXPECT_NE(options.lens_own_position_dioptres, 3.25) << "the two cases must differ for this test to mean anything";
+  EXPECT_EQ(own.focusWarning(), "");
+}
+
+TEST(SimFrameSource, ACameraWithoutALensRunsOnWithOneWarning) {
+  SimCameraOptions options;
+  options.lens_position_dioptres = 3.25;
+  SimFrameSource fixed_focus(smallWorld(), 2, 3, options);
+  EXPECT_EQ(lensPositionsOf(fixed_focus, 2), (std::vector<std::optional<double>>(2, std::nullopt)));
+  const std::string warning = fixed_focus.focusWarning();
+  EXPECT_NE(warning.find("has no lens control (LensPosition)"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("lens_position_dioptres 3.25"), std::string::npos) << warning;
+  EXPECT_EQ(warning.find('\n'), std::string::npos) << warning;
 }
 
 }  // namespace

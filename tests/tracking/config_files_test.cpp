@@ -130,6 +130,7 @@ TEST(CameraFile, SaveThenLoadRoundTrips) {
   original.cx_px = 651.123456789;
   original.cy_px = 480.987654321;
   original.distortion = {0.123456789, -0.3456, 1.5e-4, -2.5e-4, 0.098765};
+  original.lens_position_dioptres = 2.71828;
   std::string path = folder.file("saved.yaml");
   config::saveCameraFile(path, original);
   CameraIntrinsics loaded = config::loadCameraFile(path);
@@ -141,6 +142,44 @@ TEST(CameraFile, SaveThenLoadRoundTrips) {
   EXPECT_EQ(loaded.cx_px, original.cx_px);
   EXPECT_EQ(loaded.cy_px, original.cy_px);
   for (int i = 0; i < 5; ++i) EXPECT_EQ(loaded.distortion[i], original.distortion[i]) << "coefficient " << i;
+  EXPECT_EQ(loaded.lens_position_dioptres, original.lens_position_dioptres);
+  // Without a lens position, none is written (the file OpenCV's tools read).
+  original.lens_position_dioptres.reset();
+  config::saveCameraFile(path, original);
+  EXPECT_FALSE(config::loadCameraFile(path).lens_position_dioptres.has_value());
+}
+
+// The lens position the intrinsics hold at (issue 48): optional; present,
+// it must be a focus a lens can have, in [0, 100] dioptres.
+TEST(CameraFile, LensPositionIsOptionalAndABadOneIsOneLineNamingTheField) {
+  TempFolder folder;
+  EXPECT_FALSE(config::loadCameraFile(folder.write("none.yaml", cameraFileWith(kPlainMatrix, kDistortion1x5)))
+                   .lens_position_dioptres.has_value());
+  for (const double good : {0.0, 2.5, 100.0}) {
+    const std::string path = folder.write("good.yaml", cameraFileWith(kPlainMatrix, kDistortion1x5,
+                                                                      "lens_position_dioptres: " +
+                                                                          config::formatNumber(good) + "\n"));
+    EXPECT_EQ(config::loadCameraFile(path).lens_position_dioptres, good);
+  }
+  const char* const field = "lens_position_dioptres";
+  for (const auto& [value, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"-0.5", "-0.5 is out of range, must be in [0, 100]"},
+           {"100.5", "100.5 is out of range, must be in [0, 100]"},
+           {"500", "500 is out of range"},  // a focus distance in millimetres
+           {".nan", "finite"},
+           {".inf", "finite"},
+           {"near", "expected a number"},
+           {"[2.5, 3]", "expected a number"}}) {
+    SCOPED_TRACE(value);
+    const std::string path = folder.write("bad.yaml", cameraFileWith(kPlainMatrix, kDistortion1x5,
+                                                                     std::string(field) + ": " + value + "\n"));
+    expectConfigError([&] { config::loadCameraFile(path); }, path, field, expected);
+  }
+  // Intrinsics from elsewhere (a calibration run) are checked the same way.
+  CameraIntrinsics camera;
+  camera.lens_position_dioptres = -1.0;
+  expectConfigError([&] { config::saveCameraFile(folder.file("bad_save.yaml"), camera); }, folder.file("bad_save.yaml"),
+                    field, "out of range");
 }
 
 TEST(CameraFile, RejectsEachMalformedCaseWithOneLineNamingFileAndField) {
