@@ -37,7 +37,7 @@ probelight_tier(unit app AppSettings ButtonDebouncer ButtonFactory CalibrationOu
 # gles: the CPU halves of the passes (geometry, weights, the shaders' 16-bit
 # twins) that make no context.
 probelight_tier(unit gles CasterTriangles DarkeningCells DiffuseSeamsMeasure EdgeAntialiasing ExtensionList
-                GlesVersion HalfFloatRoute MediumpTwins ModelTextures MotionSmearTaps ObjectBloom ObjectBlurWeights ReflectionRungs
+                DmabufImportCheck GlesVersion HalfFloatRoute MediumpTwins ModelTextures MotionSmearTaps ObjectBloom ObjectBlurWeights ReflectionRungs
                 SensorNoiseTexels SphereTessellation)
 # ... but for sweeps of every pixel of a frame or every code (1.7-4 s).
 probelight_test_tier(accuracy gles MediumpTwins.GroundCompositeAt16BitsMovesTheCameraSampleByUnderAPixel

@@ -184,6 +184,8 @@ class Kiosk {
       return lights_->afterKeptFrame(ctx, *maps_);
     }
     PROBELIGHT_TRY(upload_->run(ctx));
+    if (const std::string notice = upload_->takeNotice(); !notice.empty())
+      log_ << logPrefix(LogPriority::kWarning) << "probelight: warning: " << notice << "\n";
     track_->run(ctx);
     maps_->setLightsFittedAt(lights_->clipReference());
     PROBELIGHT_TRY(maps_->run(ctx, upload_->texture()));

@@ -35,9 +35,18 @@ int planeFd(const Plane& plane) {
   return plane.fd.get();
 }
 
-// Sets a control the camera has; one it lacks is left out. libcamera logs
-// an ERROR for each invalid control in each request (vimc's sensor has no
-// AeEnable or AwbEnable), which would flood the journal.
+// Sets a control the camera has (`supported`: Camera::controls()); one it
+// lacks is left out. libcamera logs an ERROR for each invalid control in
+// each request (vimc's sensor has no AeEnable or AwbEnable), which would
+// flood the journal. A request's own list knows the ids only, not the
+// camera's map (its infoMap() is null), hence the map passed in.
+template <typename T, typename V>
+inline void setIfSupported(libcamera::ControlList& controls, const libcamera::ControlInfoMap& supported,
+                           const libcamera::Control<T>& control, const V& value) {
+  if (supported.find(control.id()) == supported.end()) return;
+  controls.set(control, value);
+}
+// The same for a list made from the camera's map (the start controls).
 template <typename T, typename V>
 inline void setIfSupported(libcamera::ControlList& controls, const libcamera::Control<T>& control, const V& value) {
   const libcamera::ControlInfoMap* supported = controls.infoMap();
@@ -49,31 +58,32 @@ inline void setIfSupported(libcamera::ControlList& controls, const libcamera::Co
 // split AeEnable into ExposureTimeMode and AnalogueGainMode (AeEnable stays,
 // input-only, as a shorthand for both); switching them to manual without a
 // value keeps the last values AE chose, as AeEnable false did before.
-inline void setExposureLocked(libcamera::ControlList& controls, bool locked) {
+inline void setExposureLocked(libcamera::ControlList& controls, const libcamera::ControlInfoMap& supported, bool locked) {
 #if LIBCAMERA_VERSION_MAJOR > 0 || LIBCAMERA_VERSION_MINOR >= 5
-  setIfSupported(controls, libcamera::controls::ExposureTimeMode,
+  setIfSupported(controls, supported, libcamera::controls::ExposureTimeMode,
                  locked ? libcamera::controls::ExposureTimeModeManual : libcamera::controls::ExposureTimeModeAuto);
-  setIfSupported(controls, libcamera::controls::AnalogueGainMode,
+  setIfSupported(controls, supported, libcamera::controls::AnalogueGainMode,
                  locked ? libcamera::controls::AnalogueGainModeManual : libcamera::controls::AnalogueGainModeAuto);
 #else
-  setIfSupported(controls, libcamera::controls::AeEnable, !locked);
+  setIfSupported(controls, supported, libcamera::controls::AeEnable, !locked);
 #endif
-  setIfSupported(controls, libcamera::controls::AwbEnable, !locked);
+  setIfSupported(controls, supported, libcamera::controls::AwbEnable, !locked);
 }
 
 // A fixed exposure time (microseconds) and analogue gain, AE off (0.5's
 // manual modes, AeEnable false before it). The sensor may clamp them; the
 // frame's metadata says what it used.
-inline void setManualExposure(libcamera::ControlList& controls, double exposure_us, double analogue_gain) {
+inline void setManualExposure(libcamera::ControlList& controls, const libcamera::ControlInfoMap& supported,
+                              double exposure_us, double analogue_gain) {
 #if LIBCAMERA_VERSION_MAJOR > 0 || LIBCAMERA_VERSION_MINOR >= 5
-  setIfSupported(controls, libcamera::controls::ExposureTimeMode, libcamera::controls::ExposureTimeModeManual);
-  setIfSupported(controls, libcamera::controls::AnalogueGainMode, libcamera::controls::AnalogueGainModeManual);
+  setIfSupported(controls, supported, libcamera::controls::ExposureTimeMode, libcamera::controls::ExposureTimeModeManual);
+  setIfSupported(controls, supported, libcamera::controls::AnalogueGainMode, libcamera::controls::AnalogueGainModeManual);
 #else
-  setIfSupported(controls, libcamera::controls::AeEnable, false);
+  setIfSupported(controls, supported, libcamera::controls::AeEnable, false);
 #endif
-  setIfSupported(controls, libcamera::controls::ExposureTime, static_cast<std::int32_t>(std::lround(exposure_us)));
-  setIfSupported(controls, libcamera::controls::AnalogueGain, static_cast<float>(analogue_gain));
-  setIfSupported(controls, libcamera::controls::AwbEnable, false);
+  setIfSupported(controls, supported, libcamera::controls::ExposureTime, static_cast<std::int32_t>(std::lround(exposure_us)));
+  setIfSupported(controls, supported, libcamera::controls::AnalogueGain, static_cast<float>(analogue_gain));
+  setIfSupported(controls, supported, libcamera::controls::AwbEnable, false);
 }
 
 // The shortest exposure time the camera takes (microseconds): the minimum

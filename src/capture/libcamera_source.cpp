@@ -18,6 +18,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "capture/libcamera_adapter.hpp"
+#include "capture/libcamera_log_levels.hpp"
 
 namespace probelight {
 
@@ -64,22 +65,53 @@ std::string LibcameraSource::lastError() const {
 void LibcameraSource::stop() { shutDown(); }
 
 void LibcameraSource::shutDown() {
+  bool driver_gone = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stopping_ = true;
+    // Requests out and none back for this long: the driver has stopped
+    // answering, or its device is gone (unplugged, unbound). Then
+    // Camera::stop() would abort the process: libcamera (0.0.3 to 0.4 at
+    // least) returns queued buffers only when VIDIOC_STREAMOFF succeeds,
+    // and on a gone device it fails, leaving requests queued, and
+    // PipelineHandler::stop() asserts there are none. A stream that runs
+    // gives a frame every few tens of milliseconds; the kiosk reconnects
+    // after 10 s without one.
+    constexpr auto kSilenceOfAGoneDriver = std::chrono::seconds(4);
+    driver_gone = started_ && !disconnected_ && requests_in_flight_ > 0 &&
+                  std::chrono::steady_clock::now() - last_completion_ > kSilenceOfAGoneDriver;
   }
   completed_changed_.notify_all();
   if (camera_) {
-    if (started_) camera_->stop();  // cancels the queued requests
     camera_->requestCompleted.disconnect(this);
     camera_->disconnected.disconnect(this);
-    camera_->release();
-    camera_.reset();
+    if (driver_gone) {
+      // The camera is abandoned, not stopped. Everything goes while the
+      // manager still runs, because it deletes a camera on its own thread
+      // (a camera let go after it stopped would never be deleted, and its
+      // devices would stay open): the requests first (one still pending
+      // cancels its buffers, so they must still be there), then the
+      // buffers, then the camera, whose deletion closes its devices
+      // (closing a V4L2 device ends its stream). The pipeline's list of
+      // queued requests is only dropped with it, never read again.
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        completed_.clear();
+      }
+      slots_.clear();
+      allocator_.reset();
+      camera_.reset();
+    } else {
+      if (started_) camera_->stop();  // cancels the queued requests
+      camera_->release();
+      camera_.reset();
+    }
   }
   started_ = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     completed_.clear();
+    requests_in_flight_ = 0;
   }
   slots_.clear();
   allocator_.reset();
@@ -113,6 +145,7 @@ bool LibcameraSource::refuseSettings() {
 }
 
 bool LibcameraSource::startCamera(std::string& error) {
+  setLibcameraLogLevels("");
   manager_ = std::make_unique<libcamera::CameraManager>();
   if (const int result = manager_->start(); result != 0) {
     error = std::string("camera: libcamera's camera manager did not start: ") + std::strerror(-result);
@@ -279,6 +312,7 @@ bool LibcameraSource::startCamera(std::string& error) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     exposure_.pipelineRestarted();
+    last_completion_ = std::chrono::steady_clock::now();
   }
   for (const std::unique_ptr<Slot>& slot : slots_) {
     addExposureControls(slot->request.get());
@@ -287,15 +321,19 @@ bool LibcameraSource::startCamera(std::string& error) {
       error = "camera: cannot queue a capture request";
       return false;
     }
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++requests_in_flight_;
   }
   return true;
 }
 
 // On libcamera's thread: only hand the request over.
 void LibcameraSource::requestCompleted(libcamera::Request* request) {
-  if (request->status() == libcamera::Request::RequestCancelled) return;
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    --requests_in_flight_;
+    last_completion_ = std::chrono::steady_clock::now();
+    if (request->status() == libcamera::Request::RequestCancelled) return;
     completed_.push_back(request);
   }
   completed_changed_.notify_all();
@@ -344,10 +382,14 @@ void LibcameraSource::addExposureControls(libcamera::Request* request) {
   }
   switch (controls.kind) {
     case ExposureControls::Kind::kNone: break;
-    case ExposureControls::Kind::kAuto: libcamera_adapter::setExposureLocked(request->controls(), false); break;
-    case ExposureControls::Kind::kLocked: libcamera_adapter::setExposureLocked(request->controls(), true); break;
+    case ExposureControls::Kind::kAuto:
+      libcamera_adapter::setExposureLocked(request->controls(), camera_->controls(), false);
+      break;
+    case ExposureControls::Kind::kLocked:
+      libcamera_adapter::setExposureLocked(request->controls(), camera_->controls(), true);
+      break;
     case ExposureControls::Kind::kManual:
-      libcamera_adapter::setManualExposure(request->controls(), controls.setting.exposure_us,
+      libcamera_adapter::setManualExposure(request->controls(), camera_->controls(), controls.setting.exposure_us,
                                            controls.setting.analogue_gain);
       break;
   }
@@ -366,7 +408,10 @@ void LibcameraSource::requeue(libcamera::Request* request) {
     error_ = "camera: cannot re-queue a capture request";
     disconnected_ = true;
     completed_changed_.notify_all();
+    return;
   }
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++requests_in_flight_;
 }
 
 FrameWait LibcameraSource::waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) {

@@ -1,10 +1,15 @@
 #include "passes/camera_frame_texture.hpp"
 #include "passes/framebuffer_state_guard.hpp"
 
+#include <unistd.h>
+
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "core/ycbcr.hpp"
+#include "passes/dmabuf_import_check.hpp"
 
 #ifndef GL_UNPACK_ROW_LENGTH_EXT
 #define GL_UNPACK_ROW_LENGTH_EXT 0x0CF2
@@ -86,6 +91,12 @@ bool CameraFrameTexture::init(const gles::Capabilities& capabilities, std::strin
   yuyv_program_ = std::move(*yuyv);
   packed_rgb_program_ = std::move(*packed);
   packed_blue_first_program_ = std::move(*packed_blue_first);
+  if (!allow_dmabuf_import)
+    dmabuf_unavailable_reason_ = "zero-copy import is turned off";
+  else if (!capabilities.egl_dmabuf_import)
+    dmabuf_unavailable_reason_ = "EGL has no EGL_EXT_image_dma_buf_import";
+  else if (!capabilities.egl_image_external)
+    dmabuf_unavailable_reason_ = "GL has no GL_OES_EGL_image_external";
   if (allow_dmabuf_import && capabilities.egl_dmabuf_import && capabilities.egl_image_external) {
     display_ = eglGetCurrentDisplay();
     create_image_ = reinterpret_cast<PFNEGLCREATEIMAGEKHRPROC>(eglGetProcAddress("eglCreateImageKHR"));
@@ -97,12 +108,48 @@ bool CameraFrameTexture::init(const gles::Capabilities& capabilities, std::strin
     if (display_ != EGL_NO_DISPLAY && create_image_ && destroy_image_ && image_target_texture_ && external) {
       external_program_ = std::move(*external);
       dmabuf_import_available_ = true;
+      queryDriverDmabufFormats();
     } else {
       dmabuf_import_problem_ = external ? "EGL lacks eglCreateImageKHR or glEGLImageTargetTexture2DOES"
                                         : "the external-image shader did not compile: " + external_error;
+      dmabuf_unavailable_reason_ = dmabuf_import_problem_;
     }
   }
   return true;
+}
+
+// The formats the driver says it imports, where it can say
+// (EGL_EXT_image_dma_buf_import_modifiers): a format outside them is named
+// as the cause before any import is tried.
+void CameraFrameTexture::queryDriverDmabufFormats() {
+  const char* extensions = eglQueryString(display_, EGL_EXTENSIONS);
+  if (!extensions || !std::strstr(extensions, "EGL_EXT_image_dma_buf_import_modifiers")) return;
+  auto query = reinterpret_cast<PFNEGLQUERYDMABUFFORMATSEXTPROC>(eglGetProcAddress("eglQueryDmaBufFormatsEXT"));
+  EGLint count = 0;
+  if (!query || !query(display_, 0, nullptr, &count) || count <= 0) return;
+  std::vector<EGLint> formats(static_cast<std::size_t>(count));
+  if (!query(display_, count, formats.data(), &count)) return;
+  driver_dmabuf_formats_.emplace();
+  for (EGLint i = 0; i < count; ++i) driver_dmabuf_formats_->push_back(static_cast<std::uint32_t>(formats[i]));
+}
+
+std::string CameraFrameTexture::dmabufUploadReason() const {
+  if (frames_in_dmabufs_ == 0 || dmabuf_import_available_) return "";
+  return dmabuf_import_problem_.empty() ? dmabuf_unavailable_reason_ : dmabuf_import_problem_;
+}
+
+std::string CameraFrameTexture::takeNotice() {
+  std::string notice;
+  notice.swap(notice_);
+  return notice;
+}
+
+void CameraFrameTexture::giveUpImport(const std::string& cause) {
+  dmabuf_import_available_ = false;
+  dmabuf_import_problem_ = cause;
+  ++dmabuf_import_fallbacks_;
+  forgetImportedBuffers();
+  notice_ = "camera: dmabuf import failed: " + cause + "; frames take the upload path from now on";
 }
 
 bool CameraFrameTexture::checkSize(int width_px, int height_px, std::string& error) const {
@@ -132,23 +179,78 @@ bool CameraFrameTexture::upload(const FrameBuffer& frame, std::string& error) {
     return false;
   }
   if (!ensureRenderableTexture(frame.width_px, frame.height_px, error)) return false;
-  if (dmabuf_import_available_ && planes.hasDmabuf(planeCount(frame.layout))) {
-    std::string import_error;
-    if (importDmabuf(planes, frame.layout, frame.width_px, frame.height_px, import_error)) {
-      last_path_ = FrameUploadPath::kDmabufImport;
-      return true;
+  if (planes.hasDmabuf(planeCount(frame.layout))) {
+    ++frames_in_dmabufs_;
+    if (!dmabuf_import_available_) {
+      if (frames_in_dmabufs_ == 1 && dmabuf_import_problem_.empty() && !dmabuf_unavailable_reason_.empty())
+        notice_ = "camera: frames come in dmabufs, but " + dmabuf_unavailable_reason_ +
+                  ": they take the upload path (a copy each)";
+    } else {
+      std::string import_error;
+      if (importDmabuf(planes, frame.layout, frame.width_px, frame.height_px, import_error)) {
+        if (!import_check_mean_difference_) return checkImportAgainstUpload(frame, error);
+        last_path_ = FrameUploadPath::kDmabufImport;
+        ++frames_by_path_[static_cast<std::size_t>(last_path_)];
+        return true;
+      }
+      // The driver would not take this buffer: the upload path from now on.
+      giveUpImport(import_error);
     }
-    // The driver would not take this buffer: the upload path from now on.
-    dmabuf_import_available_ = false;
-    dmabuf_import_problem_ = import_error;
-    forgetImportedBuffers();
   }
+  return uploadByLayout(frame, error);
+}
+
+bool CameraFrameTexture::uploadByLayout(const FrameBuffer& frame, std::string& error) {
+  const FramePlanes& planes = frame.planes;
   const bool uploaded = frame.layout == PixelLayout::kYuyv ? uploadYuyv(planes, frame.width_px, frame.height_px, error)
                         : isPacked(frame.layout)
                             ? uploadPackedRgb(planes, frame.layout, frame.width_px, frame.height_px, error)
                             : uploadPlanes(planes, frame.layout, frame.width_px, frame.height_px, error);
   if (!uploaded) return false;
   last_path_ = isYuv(frame.layout) ? FrameUploadPath::kYuvUpload : FrameUploadPath::kPackedRgbUpload;
+  ++frames_by_path_[static_cast<std::size_t>(last_path_)];
+  return true;
+}
+
+std::vector<std::uint8_t> CameraFrameTexture::readBack() const {
+  std::vector<std::uint8_t> rgba(static_cast<std::size_t>(width_px_) * static_cast<std::size_t>(height_px_) * 4u);
+  FramebufferStateGuard saved;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width_px_, height_px_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  return rgba;
+}
+
+// The imported frame (already in the texture) against the same frame
+// converted by the upload path. Both decode the same 8-bit codes with the
+// same matrix and range (the import through the colour-space hints) and
+// write 8-bit RGB: rounding alone differs by at most one code a channel.
+// The driver may place and filter the subsampled chroma otherwise than the
+// upload's shader, which moves pixels at colour edges only. A mean
+// difference over 3 codes is beyond both: a different matrix or range (a
+// narrow range taken as full is 7-15% off), or swapped channels or planes.
+bool CameraFrameTexture::checkImportAgainstUpload(const FrameBuffer& frame, std::string& error) {
+  constexpr double kMaxMeanDifferenceCodes = 3.0;
+  const std::vector<std::uint8_t> imported = readBack();
+  if (!uploadByLayout(frame, error)) return false;
+  --frames_by_path_[static_cast<std::size_t>(last_path_)];  // one frame, counted once below
+  const std::vector<std::uint8_t> uploaded = readBack();
+  double sum = 0.0;
+  for (std::size_t i = 0; i < uploaded.size(); ++i)
+    if (i % 4 != 3) sum += std::abs(static_cast<int>(imported[i]) - static_cast<int>(uploaded[i]));
+  const double mean = uploaded.empty() ? 0.0 : sum / (static_cast<double>(uploaded.size()) * 0.75);
+  import_check_mean_difference_ = mean;
+  if (mean > kMaxMeanDifferenceCodes) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "the imported frame differs from the upload path's by %.1f codes on average (rounding stays under "
+                  "%.0f): the driver converts this format otherwise",
+                  mean, kMaxMeanDifferenceCodes);
+    giveUpImport(text);
+  } else {
+    last_path_ = FrameUploadPath::kDmabufImport;
+  }
+  ++frames_by_path_[static_cast<std::size_t>(last_path_)];
   return true;
 }
 
@@ -377,16 +479,28 @@ bool CameraFrameTexture::importDmabuf(const FramePlanes& planes, PixelLayout lay
                          layout == PixelLayout::kYuyv ? EGL_YUV_CHROMA_SITING_0_EXT : EGL_YUV_CHROMA_SITING_0_5_EXT,
                          EGL_YUV_CHROMA_VERTICAL_SITING_HINT_EXT, EGL_YUV_CHROMA_SITING_0_5_EXT});
     attributes.push_back(EGL_NONE);
+    // What the buffer and the driver's list already tell, before asking.
+    std::vector<DmabufPlaneLayout> plane_layouts;
+    for (int p = 0; p < planeCount(layout); ++p) {
+      DmabufPlaneLayout plane;
+      plane.offset_bytes = planes.dmabuf_offset[p];
+      plane.pitch_bytes = planes.stride_bytes[p];
+      plane.row_bytes = minimumRowBytes(layout, p, width_px);
+      plane.rows = (p > 0 && layout != PixelLayout::kYuyv) ? (height_px + 1) / 2 : height_px;
+      const off_t size = ::lseek(planes.dmabuf_fd[p], 0, SEEK_END);
+      if (size > 0) plane.buffer_size_bytes = static_cast<std::uint64_t>(size);
+      plane_layouts.push_back(plane);
+    }
+    const std::string obstacle =
+        dmabufImportObstacle(static_cast<std::uint32_t>(drmFourccOf(layout)), plane_layouts, driver_dmabuf_formats_);
+    if (!obstacle.empty()) {
+      error = obstacle;
+      return false;
+    }
     image = create_image_(display_, EGL_NO_CONTEXT, EGL_LINUX_DMA_BUF_EXT, nullptr, attributes.data());
     if (image == EGL_NO_IMAGE_KHR) {
-      error = std::string("eglCreateImageKHR refused the camera's ") + layoutName(layout) +
-              " dmabuf (EGL error 0x" +
-              [] {
-                char text[16];
-                std::snprintf(text, sizeof text, "%04x", static_cast<unsigned>(eglGetError()));
-                return std::string(text);
-              }() +
-              "); using the upload path";
+      error = std::string(layoutName(layout)) + " " + std::to_string(width_px) + "x" + std::to_string(height_px) +
+              ": " + eglImportRefusalCause(eglGetError());
       return false;
     }
     if (planes.buffer_id != 0) imported_.push_back(ImportedBuffer{planes.buffer_id, image});

@@ -16,15 +16,19 @@
 //    LUMINANCE_ALPHA) textures, converted by a pass with the stream's matrix
 //    and range (core/ycbcr.hpp); YUYV's one plane as two views of the same
 //    bytes; packed RGB as RGB (RGBA) bytes, put in R, G, B order by a pass.
-// A failed import falls back to the upload path for good, said once.
+// A failed import falls back to the upload path for good, with its cause
+// said once in one line (passes/dmabuf_import_check.hpp). The first frame
+// imported is also taken the upload path's way and the two compared: a
+// driver that imports but converts differently is a failed import too.
 #pragma once
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
-#include <vector>
 #include <vector>
 
 #include "capture/frame_source.hpp"
@@ -66,6 +70,21 @@ class CameraFrameTexture {
   bool dmabufImportAvailable() const { return dmabuf_import_available_; }
   // Why dmabuf import was given up (empty while it works or was never tried).
   const std::string& dmabufImportProblem() const { return dmabuf_import_problem_; }
+  // Why frames in dmabufs take the upload path, where any came: the import
+  // given up, or what the GPU lacks for it. Empty otherwise.
+  std::string dmabufUploadReason() const;
+  // Frames converted by each path since init (indexed by FrameUploadPath),
+  // frames that came in dmabufs, and imports given up (0 or 1).
+  long long framesBy(FrameUploadPath path) const { return frames_by_path_[static_cast<std::size_t>(path)]; }
+  long long framesInDmabufs() const { return frames_in_dmabufs_; }
+  long long dmabufImportFallbacks() const { return dmabuf_import_fallbacks_; }
+  // The first imported frame against the upload path: mean absolute
+  // difference of the RGB codes (nullopt before one was compared).
+  std::optional<double> importCheckMeanDifference() const { return import_check_mean_difference_; }
+  // The one line to say once, when the path of camera frames changed for a
+  // reason a person should know (an import failed, or frames in dmabufs
+  // cannot be imported here); empty when there is none. Taking it clears it.
+  std::string takeNotice();
 
  private:
   struct ImportedBuffer {
@@ -108,8 +127,25 @@ class CameraFrameTexture {
   GLenum plane_format_[3] = {0, 0, 0};
   bool unpack_row_length_ = false;  // GL_EXT_unpack_subimage: strided rows in one call
 
+  // The upload path for a frame in dmabufs, after a failed import.
+  bool uploadDmabufFrame(const FrameBuffer& frame, std::string& error);
+  bool uploadByLayout(const FrameBuffer& frame, std::string& error);
+  // The first imported frame converted again by the upload path; false (and
+  // the import given up) when the two differ beyond rounding.
+  bool checkImportAgainstUpload(const FrameBuffer& frame, std::string& error);
+  std::vector<std::uint8_t> readBack() const;
+  void giveUpImport(const std::string& cause);
+  void queryDriverDmabufFormats();
+
   bool dmabuf_import_available_ = false;
   std::string dmabuf_import_problem_;
+  std::string dmabuf_unavailable_reason_;  // what the GPU or configuration lacks
+  std::optional<std::vector<std::uint32_t>> driver_dmabuf_formats_;
+  std::array<long long, 5> frames_by_path_{};
+  long long frames_in_dmabufs_ = 0;
+  long long dmabuf_import_fallbacks_ = 0;
+  std::optional<double> import_check_mean_difference_;
+  std::string notice_;
   EGLDisplay display_ = EGL_NO_DISPLAY;
   gles::Texture external_texture_;
   std::vector<ImportedBuffer> imported_;

@@ -19,7 +19,18 @@ Status UploadStage::run(const FrameContext& frame) {
 
 void UploadStage::writeReport(nlohmann::json& camera_section) const {
   camera_section["frame_upload"] = passes::toString(texture_.lastPath());
-  if (!texture_.dmabufImportProblem().empty()) camera_section["dmabuf_import_problem"] = texture_.dmabufImportProblem();
+  nlohmann::json by_path = nlohmann::json::object();
+  for (passes::FrameUploadPath path :
+       {passes::FrameUploadPath::kRgbUpload, passes::FrameUploadPath::kYuvUpload,
+        passes::FrameUploadPath::kPackedRgbUpload, passes::FrameUploadPath::kDmabufImport})
+    if (texture_.framesBy(path) > 0) by_path[passes::toString(path)] = texture_.framesBy(path);
+  camera_section["frames_by_upload_path"] = by_path;
+  camera_section["frames_in_dmabufs"] = texture_.framesInDmabufs();
+  camera_section["dmabuf_import_fallbacks"] = texture_.dmabufImportFallbacks();
+  if (const auto difference = texture_.importCheckMeanDifference())
+    camera_section["dmabuf_import_vs_upload_mean_codes"] = *difference;
+  if (const std::string reason = texture_.dmabufUploadReason(); !reason.empty())
+    camera_section["dmabuf_import_problem"] = reason;
 }
 
 }  // namespace probelight

@@ -29,8 +29,15 @@ class UploadStage {
   // The last frame uploaded (empty before the first).
   const passes::CameraFrameTexture& texture() const { return texture_; }
 
-  // report.json: camera.frame_upload (the path the last frame took) and
-  // camera.dmabuf_import_problem (why zero-copy import is not used).
+  // The one line to say once when frames change path (a failed dmabuf
+  // import and its cause); empty otherwise. Taking it clears it.
+  std::string takeNotice() { return texture_.takeNotice(); }
+
+  // report.json: camera.frame_upload (the path the last frame took),
+  // frames_by_upload_path, frames_in_dmabufs, dmabuf_import_fallbacks,
+  // dmabuf_import_vs_upload_mean_codes (the first imported frame against
+  // the upload path) and dmabuf_import_problem (why frames in dmabufs take
+  // the upload path).
   void writeReport(nlohmann::json& camera_section) const;
 
  private:

@@ -119,7 +119,7 @@ TEST_F(ReadImageFile, AHeaderClaimingASideAbove8192IsRefusedBeforeDecoding) {
   // check does too (fuzz/image_file_fuzzer.cpp: this header made OpenCV
   // allocate 2.8 GB while the check read its height as 0).
   // And the byte that ends a number is consumed whatever it is, a '#' too.
-  for (const std::string odd_separator : {std::string("P6\n3533\x10" "266777\n255\n"), std::string("P6\n3533#266777(255\n")}) {
+  for (const std::string& odd_separator : {std::string("P6\n3533\x10" "266777\n255\n"), std::string("P6\n3533#266777(255\n")}) {
     const fs::path separated = write("separated.ppm", std::vector<std::uint8_t>(odd_separator.begin(), odd_separator.end()));
     EXPECT_NE(why(separated).find("says 3533x266777"), std::string::npos) << why(separated);
   }

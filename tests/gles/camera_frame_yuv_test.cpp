@@ -9,6 +9,9 @@
 #include <random>
 #include <vector>
 
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 #include <gtest/gtest.h>
@@ -300,6 +303,110 @@ TEST_F(GpuTest, ExternalImagesAreCopiedIntoTheFrameTextureUnchanged) {
   EXPECT_LE(maxDifference(readTexture(texture.texture(), 96, 64), image), 1);
   destroy_image(display, image_handle);
   glDeleteTextures(1, &source);
+}
+
+// A frame's planes put in a memfd as if it were the camera's dmabuf, at the
+// offsets a camera would give them (one buffer, planes one after another);
+// `buffer_bytes` may cut it short. The CPU pointers stay, as a camera's
+// mapped buffer would.
+struct FakeDmabuf {
+  int fd = -1;
+  ~FakeDmabuf() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+void putPlanesInMemfd(FrameBuffer& frame, FakeDmabuf& buffer, std::size_t cut_to_bytes = 0) {
+  buffer.fd = ::memfd_create("probelight-test-frame", 0);
+  ASSERT_GE(buffer.fd, 0);
+  std::size_t offset = 0;
+  for (int p = 0; p < planeCount(frame.layout); ++p) {
+    const int rows = p == 0 ? frame.height_px : (frame.height_px + 1) / 2;
+    const std::size_t bytes = static_cast<std::size_t>(frame.planes.stride_bytes[p]) * static_cast<std::size_t>(rows);
+    ASSERT_EQ(::pwrite(buffer.fd, frame.planes.data[p], bytes, static_cast<off_t>(offset)), static_cast<ssize_t>(bytes));
+    frame.planes.dmabuf_fd[p] = buffer.fd;
+    frame.planes.dmabuf_offset[p] = static_cast<std::uint32_t>(offset);
+    offset += bytes;
+  }
+  if (cut_to_bytes) ASSERT_EQ(::ftruncate(buffer.fd, static_cast<off_t>(cut_to_bytes)), 0);
+}
+
+// The fallback a failed import takes: the frame converted by the upload
+// path as if no dmabuf were there, the cause in one line said once, and the
+// frames counted by path. Forced here by a buffer too short for its planes
+// (the cause found before the driver is asked, on any driver).
+TEST_F(GpuTest, AFailedDmabufImportFallsBackToTheUploadWithItsCauseInOneLine) {
+  const gles::Capabilities& caps = test::sharedCapabilities();
+  if (!caps.egl_image_external) GTEST_SKIP() << "this GL has no external images: no import to fall back from";
+  gles::Capabilities with_import = caps;
+  with_import.egl_dmabuf_import = true;  // so that the import is tried here too
+  const ImageRGB8 image = flatPatchImage(64, 48, 8, 11);
+  FrameBuffer plain = yuvFrame(image, PixelLayout::kNv12);
+  passes::CameraFrameTexture reference;
+  std::string error;
+  ASSERT_TRUE(reference.init(caps, error, false)) << error;
+  ASSERT_TRUE(reference.upload(plain, error)) << error;
+  const ImageRGB8 expected = readTexture(reference.texture(), 64, 48);
+
+  passes::CameraFrameTexture texture;
+  ASSERT_TRUE(texture.init(with_import, error)) << error;
+  ASSERT_TRUE(texture.dmabufImportAvailable()) << texture.dmabufImportProblem();
+  FrameBuffer frame = yuvFrame(image, PixelLayout::kNv12);
+  FakeDmabuf buffer;
+  putPlanesInMemfd(frame, buffer, 64 * 48);  // the Y plane only: the chroma rows are missing
+  ASSERT_TRUE(texture.upload(frame, error)) << error;
+  EXPECT_EQ(texture.lastPath(), passes::FrameUploadPath::kYuvUpload);
+  EXPECT_EQ(maxDifference(readTexture(texture.texture(), 64, 48), expected), 0);
+  const std::string notice = texture.takeNotice();
+  EXPECT_EQ(notice.rfind("camera: dmabuf import failed: plane layout: plane 1's rows end at byte 4608", 0), 0u)
+      << notice;
+  EXPECT_NE(notice.find("past its dmabuf's 3072 bytes; frames take the upload path from now on"), std::string::npos)
+      << notice;
+  EXPECT_EQ(notice.find('\n'), std::string::npos);
+  EXPECT_FALSE(texture.dmabufImportAvailable());
+  EXPECT_EQ(texture.dmabufUploadReason().rfind("plane layout: plane 1", 0), 0u);
+
+  // Said once; the next frames go straight to the upload path and are counted.
+  ASSERT_TRUE(texture.upload(frame, error)) << error;
+  EXPECT_EQ(texture.takeNotice(), "");
+  EXPECT_EQ(texture.framesBy(passes::FrameUploadPath::kYuvUpload), 2);
+  EXPECT_EQ(texture.framesBy(passes::FrameUploadPath::kDmabufImport), 0);
+  EXPECT_EQ(texture.framesInDmabufs(), 2);
+  EXPECT_EQ(texture.dmabufImportFallbacks(), 1);
+}
+
+// A whole buffer the driver is asked for. A driver that imports a memfd
+// (Mesa 25's llvmpipe maps it) gives the import path, checked on its first
+// frame against the upload path; one that cannot (Mesa 22's llvmpipe has no
+// EGL_EXT_image_dma_buf_import) refuses it with its EGL error named, and the
+// frame takes the upload path. Either way the picture is the frame's.
+TEST_F(GpuTest, AnImportedFrameMatchesTheUploadOrFallsBackWithTheDriversReason) {
+  const gles::Capabilities& caps = test::sharedCapabilities();
+  if (!caps.egl_image_external) GTEST_SKIP() << "this GL has no external images";
+  gles::Capabilities with_import = caps;
+  with_import.egl_dmabuf_import = true;
+  const ImageRGB8 image = flatPatchImage(64, 48, 8, 12);
+  passes::CameraFrameTexture texture;
+  std::string error;
+  ASSERT_TRUE(texture.init(with_import, error)) << error;
+  FrameBuffer frame = yuvFrame(image, PixelLayout::kNv12);
+  FakeDmabuf buffer;
+  putPlanesInMemfd(frame, buffer);
+  ASSERT_TRUE(texture.upload(frame, error)) << error;
+  const std::string notice = texture.takeNotice();
+  if (caps.egl_dmabuf_import) {
+    std::printf("this driver imports dmabufs: %s\n", notice.empty() ? "the memfd was imported" : notice.c_str());
+  }
+  if (texture.lastPath() == passes::FrameUploadPath::kDmabufImport) {
+    EXPECT_EQ(notice, "");
+    ASSERT_TRUE(texture.importCheckMeanDifference().has_value());
+    EXPECT_LE(*texture.importCheckMeanDifference(), 3.0);
+  } else {
+    EXPECT_EQ(texture.lastPath(), passes::FrameUploadPath::kYuvUpload);
+    EXPECT_EQ(notice.rfind("camera: dmabuf import failed: NV12 64x48: ", 0), 0u) << notice;
+    EXPECT_NE(notice.find("EGL"), std::string::npos) << notice;
+    EXPECT_EQ(texture.dmabufImportFallbacks(), 1);
+  }
+  EXPECT_LE(maxDifferenceInsidePatches(readTexture(texture.texture(), 64, 48), image, 8), kRoundingTolerance);
 }
 
 TEST_F(GpuTest, BrokenI420FramesAreRefusedWithAReason) {
