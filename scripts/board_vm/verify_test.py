@@ -193,5 +193,37 @@ class CameraReport(unittest.TestCase):
         self.assertFalse(verify.camera_run_report(untimed, 10)[0])
 
 
+class CameraZeroCopy(unittest.TestCase):
+    def report(self, **camera):
+        section = {"frames_by_upload_path": {"dmabuf import": 10}, "frames_in_dmabufs": 10,
+                   "dmabuf_import_fallbacks": 0, "dmabuf_import_vs_upload_mean_codes": 0.0}
+        section.update(camera)
+        return {"frames": 10, "camera": section}
+
+    def test_every_frame_imported_and_matching_the_upload_passes(self):
+        passed, detail = verify.camera_zero_copy(self.report(), 10, "import")
+        self.assertTrue(passed, detail)
+        self.assertIn("10 dmabuf import", detail)
+
+    def test_a_fallback_a_mismatch_or_an_uncompared_import_fails(self):
+        fell_back = self.report(frames_by_upload_path={"dmabuf import": 1, "packed rgb upload": 9},
+                                dmabuf_import_fallbacks=1, dmabuf_import_problem="format: no BG24")
+        passed, detail = verify.camera_zero_copy(fell_back, 10, "import")
+        self.assertFalse(passed)
+        self.assertIn("why not imported: format: no BG24", detail)
+        self.assertFalse(verify.camera_zero_copy(self.report(dmabuf_import_vs_upload_mean_codes=3.5), 10, "import")[0])
+        uncompared = self.report()
+        del uncompared["camera"]["dmabuf_import_vs_upload_mean_codes"]
+        self.assertFalse(verify.camera_zero_copy(uncompared, 10, "import")[0])
+        self.assertFalse(verify.camera_zero_copy(self.report(frames_in_dmabufs=0), 10, "import")[0])
+
+    def test_the_upload_path_needs_its_reason(self):
+        upload = self.report(frames_by_upload_path={"packed rgb upload": 10}, dmabuf_import_fallbacks=0)
+        del upload["camera"]["dmabuf_import_vs_upload_mean_codes"]
+        self.assertFalse(verify.camera_zero_copy(upload, 10, "upload")[0])
+        upload["camera"]["dmabuf_import_problem"] = "EGL has no EGL_EXT_image_dma_buf_import"
+        self.assertTrue(verify.camera_zero_copy(upload, 10, "upload")[0])
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -65,53 +65,29 @@ std::string LibcameraSource::lastError() const {
 void LibcameraSource::stop() { shutDown(); }
 
 void LibcameraSource::shutDown() {
-  bool driver_gone = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stopping_ = true;
-    // Requests out and none back for this long: the driver has stopped
-    // answering, or its device is gone (unplugged, unbound). Then
-    // Camera::stop() would abort the process: libcamera (0.0.3 to 0.4 at
-    // least) returns queued buffers only when VIDIOC_STREAMOFF succeeds,
-    // and on a gone device it fails, leaving requests queued, and
-    // PipelineHandler::stop() asserts there are none. A stream that runs
-    // gives a frame every few tens of milliseconds; the kiosk reconnects
-    // after 10 s without one.
-    constexpr auto kSilenceOfAGoneDriver = std::chrono::seconds(4);
-    driver_gone = started_ && !disconnected_ && requests_in_flight_ > 0 &&
-                  std::chrono::steady_clock::now() - last_completion_ > kSilenceOfAGoneDriver;
   }
   completed_changed_.notify_all();
   if (camera_) {
+    // libcamera (0.0.3 to 0.4 at least) aborts here when the camera's
+    // device is gone with requests still queued: VIDIOC_STREAMOFF fails,
+    // the queued buffers are never returned, and PipelineHandler::stop()
+    // asserts that no request is left. Not calling stop() does not help:
+    // deleting the running camera then asserts in its IPA proxy, whose
+    // thread only stop() ends. The service's unit restarts the process, on
+    // the stored lighting (docs/board.md).
+    if (started_) camera_->stop();  // cancels the queued requests
     camera_->requestCompleted.disconnect(this);
     camera_->disconnected.disconnect(this);
-    if (driver_gone) {
-      // The camera is abandoned, not stopped. Everything goes while the
-      // manager still runs, because it deletes a camera on its own thread
-      // (a camera let go after it stopped would never be deleted, and its
-      // devices would stay open): the requests first (one still pending
-      // cancels its buffers, so they must still be there), then the
-      // buffers, then the camera, whose deletion closes its devices
-      // (closing a V4L2 device ends its stream). The pipeline's list of
-      // queued requests is only dropped with it, never read again.
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        completed_.clear();
-      }
-      slots_.clear();
-      allocator_.reset();
-      camera_.reset();
-    } else {
-      if (started_) camera_->stop();  // cancels the queued requests
-      camera_->release();
-      camera_.reset();
-    }
+    camera_->release();
+    camera_.reset();
   }
   started_ = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     completed_.clear();
-    requests_in_flight_ = 0;
   }
   slots_.clear();
   allocator_.reset();
@@ -312,7 +288,6 @@ bool LibcameraSource::startCamera(std::string& error) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     exposure_.pipelineRestarted();
-    last_completion_ = std::chrono::steady_clock::now();
   }
   for (const std::unique_ptr<Slot>& slot : slots_) {
     addExposureControls(slot->request.get());
@@ -321,19 +296,15 @@ bool LibcameraSource::startCamera(std::string& error) {
       error = "camera: cannot queue a capture request";
       return false;
     }
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++requests_in_flight_;
   }
   return true;
 }
 
 // On libcamera's thread: only hand the request over.
 void LibcameraSource::requestCompleted(libcamera::Request* request) {
+  if (request->status() == libcamera::Request::RequestCancelled) return;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    --requests_in_flight_;
-    last_completion_ = std::chrono::steady_clock::now();
-    if (request->status() == libcamera::Request::RequestCancelled) return;
     completed_.push_back(request);
   }
   completed_changed_.notify_all();
@@ -408,10 +379,7 @@ void LibcameraSource::requeue(libcamera::Request* request) {
     error_ = "camera: cannot re-queue a capture request";
     disconnected_ = true;
     completed_changed_.notify_all();
-    return;
   }
-  std::lock_guard<std::mutex> lock(mutex_);
-  ++requests_in_flight_;
 }
 
 FrameWait LibcameraSource::waitFrame(std::chrono::milliseconds timeout, FrameLease& lease) {

@@ -129,11 +129,6 @@ class LibcameraSource final : public FrameSource {
   std::deque<libcamera::Request*> completed_;
   bool disconnected_ = false;
   bool stopping_ = false;
-  // Requests queued to libcamera and not yet back, and when one last came
-  // back (or the stream started): what shutDown() reads to tell a camera
-  // whose driver went away from one that is only slow.
-  int requests_in_flight_ = 0;
-  std::chrono::steady_clock::time_point last_completion_;
   std::string error_;
   // Exposure lock, bracket values, and what the pipeline already has.
   ExposureSequencer exposure_;

@@ -109,6 +109,18 @@ bool CameraFrameTexture::init(const gles::Capabilities& capabilities, std::strin
       external_program_ = std::move(*external);
       dmabuf_import_available_ = true;
       queryDriverDmabufFormats();
+      // Packed 24-bit RGB is imported as bytes (R8): its texel addresses
+      // need highp. Without it those frames take the upload path.
+      if (capabilities.fragment_highp) {
+        std::string bytes_error;
+        auto bytes = gles::Program::fromEmbedded("camera_yuv.vert", "camera_external_bytes.frag", "", bytes_error);
+        auto bytes_blue_first = gles::Program::fromEmbedded("camera_yuv.vert", "camera_external_bytes.frag",
+                                                            "#define PL_BLUE_FIRST 1", bytes_error);
+        if (bytes && bytes_blue_first) {
+          external_bytes_program_ = std::move(*bytes);
+          external_bytes_blue_first_program_ = std::move(*bytes_blue_first);
+        }
+      }
     } else {
       dmabuf_import_problem_ = external ? "EGL lacks eglCreateImageKHR or glEGLImageTargetTexture2DOES"
                                         : "the external-image shader did not compile: " + external_error;
@@ -422,7 +434,12 @@ bool CameraFrameTexture::drawIntoTexture(const gles::Program& program, std::stri
 }
 
 bool CameraFrameTexture::convertExternalImage(EGLImageKHR image, int width_px, int height_px, std::string& error) {
-  if (!image_target_texture_ || !external_program_.valid()) {
+  return drawExternalImage(image, external_program_, GL_LINEAR, width_px, height_px, error);
+}
+
+bool CameraFrameTexture::drawExternalImage(EGLImageKHR image, const gles::Program& program, GLint filter,
+                                           int width_px, int height_px, std::string& error) {
+  if (!image_target_texture_ || !program.valid()) {
     error = "CameraFrameTexture: external images are not available (" +
             (dmabuf_import_problem_.empty() ? std::string("no GL_OES_EGL_image_external or dmabuf import")
                                             : dmabuf_import_problem_) +
@@ -433,15 +450,20 @@ bool CameraFrameTexture::convertExternalImage(EGLImageKHR image, int width_px, i
   if (!external_texture_.valid()) external_texture_ = gles::Texture::create();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_EXTERNAL_OES, external_texture_.id());
-  glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_MIN_FILTER, filter);
+  glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_MAG_FILTER, filter);
   glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_EXTERNAL_OES, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   image_target_texture_(GL_TEXTURE_EXTERNAL_OES, static_cast<GLeglImageOES>(image));
   if (!gles::checkGl("glEGLImageTargetTexture2DOES", error)) return false;
-  external_program_.use();
-  glUniform1i(external_program_.uniform("u_image"), 0);
-  const bool drawn = drawIntoTexture(external_program_, error);
+  program.use();
+  if (&program == &external_program_) {
+    glUniform1i(program.uniform("u_image"), 0);
+  } else {
+    glUniform1i(program.uniform("u_bytes"), 0);
+    glUniform1f(program.uniform("u_width_px"), static_cast<GLfloat>(width_px));
+  }
+  const bool drawn = drawIntoTexture(program, error);
   glBindTexture(GL_TEXTURE_EXTERNAL_OES, 0);
   return drawn;
 }
@@ -451,6 +473,20 @@ bool CameraFrameTexture::importDmabuf(const FramePlanes& planes, PixelLayout lay
   if (width_px != imported_width_px_ || height_px != imported_height_px_) forgetImportedBuffers();
   imported_width_px_ = width_px;
   imported_height_px_ = height_px;
+  // Packed 24-bit RGB goes in as its bytes (R8, three texels a pixel):
+  // drivers that take no 24-bit RGB buffer (Mesa's llvmpipe refuses BG24
+  // with EGL_BAD_MATCH) take R8, and the bytes pass converts them.
+  const bool as_bytes = layout == PixelLayout::kRgb888 || layout == PixelLayout::kBgr888;
+  const gles::Program& program = !as_bytes                        ? external_program_
+                                 : layout == PixelLayout::kBgr888 ? external_bytes_program_
+                                                                  : external_bytes_blue_first_program_;
+  if (as_bytes && !program.valid()) {
+    error = std::string(layoutName(layout)) + " is imported as bytes, which needs highp in fragment shaders; " +
+            "this GPU has none";
+    return false;
+  }
+  const EGLint import_fourcc = as_bytes ? fourcc('R', '8', ' ', ' ') : drmFourccOf(layout);
+  const EGLint import_width = as_bytes ? 3 * width_px : width_px;
   EGLImageKHR image = EGL_NO_IMAGE_KHR;
   for (const ImportedBuffer& imported : imported_)
     if (planes.buffer_id != 0 && imported.buffer_id == planes.buffer_id) image = imported.image;
@@ -459,8 +495,8 @@ bool CameraFrameTexture::importDmabuf(const FramePlanes& planes, PixelLayout lay
     const EGLint color_space = encoding.matrix == YcbcrMatrix::kRec601   ? EGL_ITU_REC601_EXT
                                : encoding.matrix == YcbcrMatrix::kRec709 ? EGL_ITU_REC709_EXT
                                                                          : EGL_ITU_REC2020_EXT;
-    std::vector<EGLint> attributes = {EGL_WIDTH, width_px, EGL_HEIGHT, height_px, EGL_LINUX_DRM_FOURCC_EXT,
-                                      drmFourccOf(layout)};
+    std::vector<EGLint> attributes = {EGL_WIDTH, import_width, EGL_HEIGHT, height_px, EGL_LINUX_DRM_FOURCC_EXT,
+                                      import_fourcc};
     const EGLint plane_keys[3][3] = {
         {EGL_DMA_BUF_PLANE0_FD_EXT, EGL_DMA_BUF_PLANE0_OFFSET_EXT, EGL_DMA_BUF_PLANE0_PITCH_EXT},
         {EGL_DMA_BUF_PLANE1_FD_EXT, EGL_DMA_BUF_PLANE1_OFFSET_EXT, EGL_DMA_BUF_PLANE1_PITCH_EXT},
@@ -492,7 +528,7 @@ bool CameraFrameTexture::importDmabuf(const FramePlanes& planes, PixelLayout lay
       plane_layouts.push_back(plane);
     }
     const std::string obstacle =
-        dmabufImportObstacle(static_cast<std::uint32_t>(drmFourccOf(layout)), plane_layouts, driver_dmabuf_formats_);
+        dmabufImportObstacle(static_cast<std::uint32_t>(import_fourcc), plane_layouts, driver_dmabuf_formats_);
     if (!obstacle.empty()) {
       error = obstacle;
       return false;
@@ -505,7 +541,8 @@ bool CameraFrameTexture::importDmabuf(const FramePlanes& planes, PixelLayout lay
     }
     if (planes.buffer_id != 0) imported_.push_back(ImportedBuffer{planes.buffer_id, image});
   }
-  const bool converted = convertExternalImage(image, width_px, height_px, error);
+  const bool converted =
+      drawExternalImage(image, program, as_bytes ? GL_NEAREST : GL_LINEAR, width_px, height_px, error);
   if (planes.buffer_id == 0) destroy_image_(display_, image);  // not a camera buffer: no reuse
   return converted;
 }

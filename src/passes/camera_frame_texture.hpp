@@ -11,7 +11,8 @@
 //    EGL has EGL_EXT_image_dma_buf_import and GL has
 //    GL_OES_EGL_image_external, the buffer is imported once as an EGLImage
 //    (cached per camera buffer) with the stream's colour-space hints, and a
-//    pass samples it as samplerExternalOES into the RGB texture;
+//    pass samples it as samplerExternalOES into the RGB texture; packed
+//    24-bit RGB is imported as its bytes (R8) and put together by the pass;
 //  - upload: the planes as LUMINANCE (NV12's Cb Cr pairs as
 //    LUMINANCE_ALPHA) textures, converted by a pass with the stream's matrix
 //    and range (core/ycbcr.hpp); YUYV's one plane as two views of the same
@@ -103,6 +104,9 @@ class CameraFrameTexture {
   // imported (no dmabuf), false with `error` set when an import failed.
   bool importDmabuf(const FramePlanes& planes, PixelLayout layout, int width_px, int height_px, std::string& error);
   void forgetImportedBuffers();
+  // An EGLImage sampled by `program` (filtered by `filter`) into the frame texture.
+  bool drawExternalImage(EGLImageKHR image, const gles::Program& program, GLint filter, int width_px, int height_px,
+                         std::string& error);
   // Draws `program` over the whole output texture.
   bool drawIntoTexture(const gles::Program& program, std::string& error);
 
@@ -120,6 +124,8 @@ class CameraFrameTexture {
   gles::Program packed_rgb_program_;         // BGR888: R, G, B bytes
   gles::Program packed_blue_first_program_;  // RGB888, XRGB8888: B, G, R bytes
   gles::Program external_program_;
+  gles::Program external_bytes_program_;             // BGR888 imported as R8: R, G, B bytes
+  gles::Program external_bytes_blue_first_program_;  // RGB888 imported as R8: B, G, R bytes
   gles::FullScreenQuad quad_;
   gles::Texture planes_[3];
   int plane_width_[3] = {0, 0, 0};

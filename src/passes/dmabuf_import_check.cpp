@@ -59,7 +59,8 @@ std::string eglImportRefusalCause(int egl_error) {
     case 0x3004:
       return "the driver does not know an attribute given (EGL_BAD_ATTRIBUTE: the colour-space or siting hints)";
     case 0x3003:
-      return "the driver ran out of memory (EGL_BAD_ALLOC)";
+      return "the driver could not make an image of the buffer (EGL_BAD_ALLOC: out of memory, or a buffer it "
+             "cannot map)";
     default: {
       char code[16];
       std::snprintf(code, sizeof code, "0x%04x", static_cast<unsigned>(egl_error));

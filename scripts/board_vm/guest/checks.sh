@@ -67,9 +67,7 @@ groups=$(id -nG probelight 2>/dev/null)
 pass_if install-user "sysusers: $(getent passwd probelight | cut -d: -f1,6,7); groups: ${groups:-none}" \
   bash -c '[[ " $1 " == *" video "* && " $1 " == *" render "* && " $1 " == *" gpio "* ]]' _ "$groups"
 # The board's own calibration, as its owner would install it: vimc's
-# camera at the size it streams nearest the template's (636x480). The
-# template is kept for the refusal check.
-cp /etc/probelight/camera.yaml /usr/share/doc/probelight/camera-template.yaml
+# camera at a size every vimc streams (636x480; Linux 6.1's gives no 640).
 install -m 0644 "$in/vimc-camera.yaml" /etc/probelight/camera.yaml
 # The emulator is 10-50x slower than a board: only the start timeout and
 # the watchdog are lengthened, nothing else of the shipped unit.
@@ -171,6 +169,13 @@ sync
 pass_if camera-run "probelight run --source libcamera: exit $camera_status; $(grep -m 1 '^probelight: libcamera' "$out/camera-run.txt")" \
   test "$camera_status" -eq 0
 host_request verify camera-report camera-report camera-run/report.json 10
+# Zero copy: where the start-up line says the GPU imports dmabufs (Mesa 25's
+# llvmpipe does, 22's does not), vimc's buffers are imported (its BGR888 as
+# bytes) and the first one matched the upload path; elsewhere they take the
+# upload path and the report says why.
+zero_copy=upload
+grep -q '+dmabuf_import' "$out/camera-run.txt" && zero_copy=import
+host_request verify camera-zero-copy camera-zero-copy camera-run/report.json 10 "$zero_copy"
 # The run recorded vimc's frames as they came (--record): replayed on their
 # own (the recording's camera.yaml and rig.yaml), they make the same
 # pictures; and analyze takes one (vimc's test pattern has no tag: exit 3,
@@ -206,16 +211,20 @@ if [[ $analysis_json =~ \"frame\":\ *\{[^}]*\"width_px\":\ *([0-9]+),\ *\"height
 fi
 pass_if camera-recording-analyzed "analyze --frame frame_000005.json: exit $analyze_status (3: no tag); ${analyzed:-no analysis.json}" \
   bash -c '[[ $1 == 3 && $2 == "636 480 "*"tag"* ]]' _ "$analyze_status" "$analyzed"
-# A calibration for a size the camera cannot stream (the shipped template's
-# 640x480; vimc gives 636x480 nearest) is refused naming both, with exit
-# status 2: a configuration error that the unit does not restart.
+# A calibration for a size the camera cannot stream is refused naming both,
+# with exit status 2: a configuration error that the unit does not restart.
+# 4800x3600 is beyond every vimc (Linux 6.1's and 6.12's stream up to
+# 4096x2160; 6.12's also gives the template's 640x480 exactly): vimc's
+# calibration scaled by 4800/636, so that it stays a valid lens.
+sed -e 's/^image_width: .*/image_width: 4800/' -e 's/^image_height: .*/image_height: 3600/' \
+  -e 's/627\.0,/4732.0,/g' -e 's/317\.5,/2399.5,/' -e 's/239\.5,/1799.5,/' "$in/vimc-camera.yaml" >/tmp/camera-too-big.yaml
 runuser -u probelight -- /usr/bin/probelight run --config /etc/probelight/probelight.yaml \
-  --calibration /usr/share/doc/probelight/camera-template.yaml --rig /etc/probelight/rig.yaml --source libcamera \
+  --calibration /tmp/camera-too-big.yaml --rig /etc/probelight/rig.yaml --source libcamera \
   --display headless --frames 3 --out /tmp/camera-refused >"$out/camera-refused.txt" 2>&1
 refused_status=$?
 refusal=$(grep -m 1 '^probelight: camera: ' "$out/camera-refused.txt")
 pass_if camera-size-refused "exit $refused_status (2); ${refusal:-no refusal line}" \
-  bash -c '[[ $1 == 2 && $2 == *640x480* && $2 == *636x480* ]]' _ "$refused_status" "$refusal"
+  bash -c '[[ $1 == 2 && $2 == *4800x3600* && ${2//4800x3600/} =~ [0-9]+x[0-9]+ ]]' _ "$refused_status" "$refusal"
 
 # ------------------------------------------------------------ 5. the button
 timed_step "5. the button, with stored lighting from the simulated run"
