@@ -327,7 +327,9 @@ void putPlanesInMemfd(FrameBuffer& frame, FakeDmabuf& buffer, std::size_t cut_to
     frame.planes.dmabuf_offset[p] = static_cast<std::uint32_t>(offset);
     offset += bytes;
   }
-  if (cut_to_bytes) ASSERT_EQ(::ftruncate(buffer.fd, static_cast<off_t>(cut_to_bytes)), 0);
+  if (cut_to_bytes) {
+    ASSERT_EQ(::ftruncate(buffer.fd, static_cast<off_t>(cut_to_bytes)), 0);
+  }
 }
 
 // The fallback a failed import takes: the frame converted by the upload
@@ -387,7 +389,7 @@ TEST_F(GpuTest, AnImportedFrameMatchesTheUploadOrFallsBackWithTheDriversReason) 
   gles::Capabilities with_import = caps;
   with_import.egl_dmabuf_import = true;
   // 636 wide as vimc streams: rows of 1908 bytes, a multiple of 4 only.
-  for (int width_px : {64, 636})
+  for (int width_px : {64, 636}) {
   for (PixelLayout layout : {PixelLayout::kNv12, PixelLayout::kI420, PixelLayout::kBgr888, PixelLayout::kRgb888}) {
     SCOPED_TRACE(std::string(layoutName(layout)) + " " + std::to_string(width_px) + " wide");
     const ImageRGB8 image = flatPatchImage(width_px, 48, 4, 12);
@@ -417,6 +419,7 @@ TEST_F(GpuTest, AnImportedFrameMatchesTheUploadOrFallsBackWithTheDriversReason) 
     } else {
       EXPECT_EQ(maxDifference(shown, image), 0);
     }
+  }
   }
 }
 
