@@ -200,29 +200,35 @@ class CameraZeroCopy(unittest.TestCase):
         section.update(camera)
         return {"frames": 10, "camera": section}
 
-    def test_every_frame_imported_and_matching_the_upload_passes(self):
-        passed, detail = verify.camera_zero_copy(self.report(), 10, "import")
-        self.assertTrue(passed, detail)
-        self.assertIn("10 dmabuf import", detail)
+    def uploaded(self, **camera):
+        report = self.report(frames_by_upload_path={"packed rgb upload": 10}, **camera)
+        del report["camera"]["dmabuf_import_vs_upload_mean_codes"]
+        return report
 
-    def test_a_fallback_a_mismatch_or_an_uncompared_import_fails(self):
-        fell_back = self.report(frames_by_upload_path={"dmabuf import": 1, "packed rgb upload": 9},
-                                dmabuf_import_fallbacks=1, dmabuf_import_problem="format: no BG24")
-        passed, detail = verify.camera_zero_copy(fell_back, 10, "import")
-        self.assertFalse(passed)
-        self.assertIn("why not imported: format: no BG24", detail)
-        self.assertFalse(verify.camera_zero_copy(self.report(dmabuf_import_vs_upload_mean_codes=3.5), 10, "import")[0])
+    def test_every_frame_imported_and_matching_the_upload_passes(self):
+        passed, detail = verify.camera_zero_copy(self.report(), 10)
+        self.assertTrue(passed, detail)
+        self.assertIn("imported; by path: 10 dmabuf import", detail)
+
+    def test_a_mismatch_an_uncompared_import_or_no_dmabufs_fail(self):
+        self.assertFalse(verify.camera_zero_copy(self.report(dmabuf_import_vs_upload_mean_codes=3.5), 10)[0])
         uncompared = self.report()
         del uncompared["camera"]["dmabuf_import_vs_upload_mean_codes"]
-        self.assertFalse(verify.camera_zero_copy(uncompared, 10, "import")[0])
-        self.assertFalse(verify.camera_zero_copy(self.report(frames_in_dmabufs=0), 10, "import")[0])
+        self.assertFalse(verify.camera_zero_copy(uncompared, 10)[0])
+        self.assertFalse(verify.camera_zero_copy(self.report(frames_in_dmabufs=0), 10)[0])
 
-    def test_the_upload_path_needs_its_reason(self):
-        upload = self.report(frames_by_upload_path={"packed rgb upload": 10}, dmabuf_import_fallbacks=0)
-        del upload["camera"]["dmabuf_import_vs_upload_mean_codes"]
-        self.assertFalse(verify.camera_zero_copy(upload, 10, "upload")[0])
-        upload["camera"]["dmabuf_import_problem"] = "EGL has no EGL_EXT_image_dma_buf_import"
-        self.assertTrue(verify.camera_zero_copy(upload, 10, "upload")[0])
+    def test_the_upload_path_passes_with_its_cause_only(self):
+        self.assertFalse(verify.camera_zero_copy(self.uploaded(), 10)[0])
+        passed, detail = verify.camera_zero_copy(
+            self.uploaded(dmabuf_import_fallbacks=1, dmabuf_import_problem="BGR888 636x480: EGL_BAD_ALLOC"), 10)
+        self.assertTrue(passed, detail)
+        self.assertIn("uploaded; by path: 10 packed rgb upload", detail)
+        self.assertIn("why not imported: BGR888 636x480: EGL_BAD_ALLOC", detail)
+
+    def test_frames_split_between_the_paths_fail(self):
+        split = self.report(frames_by_upload_path={"dmabuf import": 4, "packed rgb upload": 6},
+                            dmabuf_import_fallbacks=1, dmabuf_import_problem="a cause")
+        self.assertFalse(verify.camera_zero_copy(split, 10)[0])
 
 
 if __name__ == "__main__":

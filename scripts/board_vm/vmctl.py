@@ -301,9 +301,9 @@ class Controller:
             elif kind == "camera-report" and len(args) == 2:
                 report = verify.load_json(self.guest_file(args[0]))
                 passed, detail = verify.camera_run_report(report, int(args[1]))
-            elif kind == "camera-zero-copy" and len(args) == 3 and args[2] in ("import", "upload"):
+            elif kind == "camera-zero-copy" and len(args) == 2:
                 report = verify.load_json(self.guest_file(args[0]))
-                passed, detail = verify.camera_zero_copy(report, int(args[1]), args[2])
+                passed, detail = verify.camera_zero_copy(report, int(args[1]))
             else:
                 return f"error: verify {kind} with {len(args)} arguments: unknown"
         except KeyError as missing:
