@@ -137,12 +137,16 @@ def camera_run_report(report, min_frames):
                     + f"; stages: {'; '.join(timings) or 'none'}")
 
 
-def camera_zero_copy(report, min_frames):
+def camera_zero_copy(report, min_frames, required="either"):
     """The camera's frames came in dmabufs and took one path through the
     GPU, as the product promises: either every frame was imported, none fell
     back, and the first imported frame matched the upload path within 3
     codes on average (the product's own tolerance); or none was imported,
-    at most one import was given up, and the report names the cause."""
+    at most one import was given up, and the report names the cause.
+    required="imported" accepts the first only (a guest whose driver is
+    known to import the camera's buffers)."""
+    if required not in ("either", "imported"):
+        raise ValueError(f"camera-zero-copy: required path {required!r}: either or imported")
     camera = report.get("camera", {})
     by_path = camera.get("frames_by_upload_path", {})
     imported = by_path.get("dmabuf import", 0)
@@ -152,11 +156,12 @@ def camera_zero_copy(report, min_frames):
     problem = camera.get("dmabuf_import_problem", "")
     all_imported = imported == in_dmabufs and fallbacks == 0 and difference is not None and difference <= 3.0
     all_uploaded_with_a_cause = imported == 0 and fallbacks <= 1 and bool(problem)
-    passed = in_dmabufs >= min_frames and (all_imported or all_uploaded_with_a_cause)
+    passed = in_dmabufs >= min_frames and (all_imported or (required == "either" and all_uploaded_with_a_cause))
     taken = "imported" if all_imported else "uploaded" if all_uploaded_with_a_cause else "neither"
     paths = ", ".join(f"{count} {name}" for name, count in sorted(by_path.items()))
     compared = f"{difference:.2f} codes" if difference is not None else "not compared"
-    return passed, (f"{in_dmabufs} frames in dmabufs (>= {min_frames}), {taken}; by path: {paths or 'none'}; "
+    return passed, (f"{in_dmabufs} frames in dmabufs (>= {min_frames}), {taken} ({required} required); "
+                    f"by path: {paths or 'none'}; "
                     f"first import against the upload: {compared}; fallbacks {fallbacks}"
                     + (f"; why not imported: {problem}" if problem else ""))
 

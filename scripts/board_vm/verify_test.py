@@ -208,7 +208,7 @@ class CameraZeroCopy(unittest.TestCase):
     def test_every_frame_imported_and_matching_the_upload_passes(self):
         passed, detail = verify.camera_zero_copy(self.report(), 10)
         self.assertTrue(passed, detail)
-        self.assertIn("imported; by path: 10 dmabuf import", detail)
+        self.assertIn("imported (either required); by path: 10 dmabuf import", detail)
 
     def test_a_mismatch_an_uncompared_import_or_no_dmabufs_fail(self):
         self.assertFalse(verify.camera_zero_copy(self.report(dmabuf_import_vs_upload_mean_codes=3.5), 10)[0])
@@ -222,8 +222,17 @@ class CameraZeroCopy(unittest.TestCase):
         passed, detail = verify.camera_zero_copy(
             self.uploaded(dmabuf_import_fallbacks=1, dmabuf_import_problem="BGR888 636x480: EGL_BAD_ALLOC"), 10)
         self.assertTrue(passed, detail)
-        self.assertIn("uploaded; by path: 10 packed rgb upload", detail)
+        self.assertIn("uploaded (either required); by path: 10 packed rgb upload", detail)
         self.assertIn("why not imported: BGR888 636x480: EGL_BAD_ALLOC", detail)
+
+    def test_a_guest_that_must_import_fails_on_the_upload_path(self):
+        with_a_cause = self.uploaded(dmabuf_import_fallbacks=1, dmabuf_import_problem="BGR888 636x480: EGL_BAD_ALLOC")
+        passed, detail = verify.camera_zero_copy(with_a_cause, 10, "imported")
+        self.assertFalse(passed, detail)
+        self.assertIn("uploaded (imported required)", detail)
+        self.assertTrue(verify.camera_zero_copy(self.report(), 10, "imported")[0])
+        with self.assertRaises(ValueError):
+            verify.camera_zero_copy(self.report(), 10, "uploaded")
 
     def test_frames_split_between_the_paths_fail(self):
         split = self.report(frames_by_upload_path={"dmabuf import": 4, "packed rgb upload": 6},

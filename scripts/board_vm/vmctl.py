@@ -301,9 +301,9 @@ class Controller:
             elif kind == "camera-report" and len(args) == 2:
                 report = verify.load_json(self.guest_file(args[0]))
                 passed, detail = verify.camera_run_report(report, int(args[1]))
-            elif kind == "camera-zero-copy" and len(args) == 2:
+            elif kind == "camera-zero-copy" and len(args) in (2, 3):
                 report = verify.load_json(self.guest_file(args[0]))
-                passed, detail = verify.camera_zero_copy(report, int(args[1]))
+                passed, detail = verify.camera_zero_copy(report, int(args[1]), *args[2:])
             else:
                 return f"error: verify {kind} with {len(args)} arguments: unknown"
         except KeyError as missing:

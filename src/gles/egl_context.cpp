@@ -70,7 +70,41 @@ std::unique_ptr<EglContext> finishContext(EGLDisplay display, bool use_pbuffer, 
                                       use_pbuffer ? EglSurfaceKind::kPbuffer : EglSurfaceKind::kNone, platform_name);
 }
 
+// Mesa's software EGL device (EGL_MESA_device_software), where the EGL lists
+// devices and has one.
+EGLDeviceEXT softwareDevice() {
+  auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+  auto query_device_string =
+      reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
+  EGLint count = 0;
+  if (query_devices == nullptr || query_device_string == nullptr || !query_devices(0, nullptr, &count) || count <= 0)
+    return EGL_NO_DEVICE_EXT;
+  std::vector<EGLDeviceEXT> devices(static_cast<size_t>(count));
+  query_devices(count, devices.data(), &count);
+  for (EGLint i = 0; i < count; ++i)
+    if (hasExtension(query_device_string(devices[static_cast<size_t>(i)], EGL_EXTENSIONS), "EGL_MESA_device_software"))
+      return devices[static_cast<size_t>(i)];
+  return EGL_NO_DEVICE_EXT;
+}
+
+// Whether `display` initialises and imports dmabufs without a surface.
+bool importsDmabufsSurfaceless(EGLDisplay display) {
+  if (display == EGL_NO_DISPLAY || !eglInitialize(display, nullptr, nullptr)) return false;
+  const char* extensions = eglQueryString(display, EGL_EXTENSIONS);
+  const bool imports = hasExtension(extensions, "EGL_EXT_image_dma_buf_import") &&
+                       hasExtension(extensions, "EGL_KHR_surfaceless_context");
+  eglTerminate(display);
+  return imports;
+}
+
 }  // namespace
+
+std::string displayDriverName(EGLDisplay display) {
+  using GetDriverName = const char* (*)(EGLDisplay);
+  auto get_driver_name = reinterpret_cast<GetDriverName>(eglGetProcAddress("eglGetDisplayDriverName"));
+  const char* name = get_driver_name != nullptr ? get_driver_name(display) : nullptr;
+  return name != nullptr ? name : "";
+}
 
 EGLContext createGlesContext(EGLDisplay display, EGLConfig config) {
   EGLint renderable = 0;
@@ -144,17 +178,37 @@ std::unique_ptr<EglContext> EglContext::createHeadless(std::string& error) {
   auto get_platform_display =
       reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
   const bool has_platform_base = get_platform_display != nullptr && hasExtension(client_extensions, "EGL_EXT_platform_base");
+  const bool has_platform_device = has_platform_base && hasExtension(client_extensions, "EGL_EXT_platform_device");
 
   if (has_platform_base && hasExtension(client_extensions, "EGL_MESA_platform_surfaceless")) {
     std::string why;
     EGLDisplay display = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (auto context = finishContext(display, false, "surfaceless", why)) return context;
+    if (auto context = finishContext(display, false, "surfaceless", why)) {
+      // Where a DRM device has no driver that renders (a virtual machine's
+      // display-only virtio-gpu), Mesa's surfaceless platform renders with
+      // llvmpipe through that device (kms_swrast), and a camera's dmabuf is
+      // then imported through the display driver, which may refuse it.
+      // Headless rendering needs no display: the same llvmpipe on Mesa's
+      // software device maps an imported dmabuf itself. It is taken where it
+      // offers the import; the surfaceless context otherwise.
+      if (!has_platform_device || displayDriverName(display) != "kms_swrast") return context;
+      EGLDisplay software = EGL_NO_DISPLAY;
+      if (EGLDeviceEXT device = softwareDevice(); device != EGL_NO_DEVICE_EXT)
+        software = get_platform_display(EGL_PLATFORM_DEVICE_EXT, device, nullptr);
+      if (!importsDmabufsSurfaceless(software)) return context;
+      context.reset();  // releases the thread's current context before the next is made current
+      if (auto software_context =
+              finishContext(software, false, "Mesa's software device, not surfaceless's kms_swrast", why))
+        return software_context;
+      attempts += "\n  Mesa's software device (after surfaceless gave kms_swrast): " + why;
+      if (auto again = finishContext(display, false, "surfaceless", why)) return again;
+    }
     attempts += "\n  EGL_MESA_platform_surfaceless: " + why;
   } else {
     attempts += "\n  EGL_MESA_platform_surfaceless: not offered by this EGL";
   }
 
-  if (has_platform_base && hasExtension(client_extensions, "EGL_EXT_platform_device")) {
+  if (has_platform_device) {
     auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
     EGLint device_count = 0;
     if (query_devices != nullptr && query_devices(0, nullptr, &device_count) && device_count > 0) {

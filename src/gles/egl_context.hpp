@@ -21,8 +21,11 @@ class EglContext {
  public:
   // Headless GLES2 context with no display server. Tries, in order,
   // EGL_MESA_platform_surfaceless, EGL_EXT_platform_device and the default
-  // display with a 1x1 pbuffer. On failure returns null and explains every
-  // attempt in `error`. The context is current on the calling thread on return.
+  // display with a 1x1 pbuffer; where surfaceless gives Mesa's kms_swrast
+  // (llvmpipe through a DRM device that cannot render), Mesa's software
+  // device instead if it imports dmabufs. On failure returns null and
+  // explains every attempt in `error`. The context is current on the
+  // calling thread on return.
   static std::unique_ptr<EglContext> createHeadless(std::string& error);
 
   // Takes ownership of already-created handles (used by factories, including
@@ -40,7 +43,7 @@ class EglContext {
   EGLContext context() const { return context_; }
   EGLSurface surface() const { return surface_; }
   EglSurfaceKind surfaceKind() const { return surface_kind_; }
-  // "surfaceless", "device", "default+pbuffer": for logs.
+  // "surfaceless", "device", "default+pbuffer", ...: for logs.
   const std::string& platformName() const { return platform_name_; }
 
  private:
@@ -51,6 +54,10 @@ class EglContext {
   EglSurfaceKind surface_kind_ = EglSurfaceKind::kNone;
   std::string platform_name_;
 };
+
+// The display's driver as Mesa names it (EGL_MESA_query_driver: "swrast",
+// "kms_swrast", "v3d", ...), or "" where the EGL does not say.
+std::string displayDriverName(EGLDisplay display);
 
 // Human-readable name of an EGL error code, e.g. "EGL_BAD_MATCH (0x3009)".
 std::string eglErrorName(EGLint code);

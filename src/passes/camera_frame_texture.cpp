@@ -1,14 +1,17 @@
 #include "passes/camera_frame_texture.hpp"
 #include "passes/framebuffer_state_guard.hpp"
 
+#include <sys/mman.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
 #include "core/ycbcr.hpp"
+#include "gles/egl_context.hpp"
 #include "passes/dmabuf_import_check.hpp"
 
 #ifndef GL_UNPACK_ROW_LENGTH_EXT
@@ -524,7 +527,11 @@ bool CameraFrameTexture::importDmabuf(const FramePlanes& planes, PixelLayout lay
       plane.row_bytes = minimumRowBytes(layout, p, width_px);
       plane.rows = (p > 0 && layout != PixelLayout::kYuyv) ? (height_px + 1) / 2 : height_px;
       const off_t size = ::lseek(planes.dmabuf_fd[p], 0, SEEK_END);
-      if (size > 0) plane.buffer_size_bytes = static_cast<std::uint64_t>(size);
+      if (size > 0)
+        plane.buffer_size_bytes = static_cast<std::uint64_t>(size);
+      else
+        plane.buffer_size_errno = size < 0 ? errno : 0;
+      ::lseek(planes.dmabuf_fd[p], 0, SEEK_SET);
       plane_layouts.push_back(plane);
     }
     const std::string obstacle =
@@ -535,8 +542,22 @@ bool CameraFrameTexture::importDmabuf(const FramePlanes& planes, PixelLayout lay
     }
     image = create_image_(display_, EGL_NO_CONTEXT, EGL_LINUX_DMA_BUF_EXT, nullptr, attributes.data());
     if (image == EGL_NO_IMAGE_KHR) {
+      const EGLint egl_error = eglGetError();
+      // A software renderer maps the buffer itself: whether the CPU can is
+      // the first thing to know when it refuses.
+      for (int p = 0; p < planeCount(layout); ++p) {
+        if (!plane_layouts[p].buffer_size_bytes) continue;
+        const std::size_t size = static_cast<std::size_t>(*plane_layouts[p].buffer_size_bytes);
+        void* mapped = ::mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, planes.dmabuf_fd[p], 0);
+        plane_layouts[p].cpu_mapping_errno = mapped == MAP_FAILED ? errno : 0;
+        if (mapped != MAP_FAILED) ::munmap(mapped, size);
+      }
       error = std::string(layoutName(layout)) + " " + std::to_string(width_px) + "x" + std::to_string(height_px) +
-              ": " + eglImportRefusalCause(eglGetError());
+              ": " + eglImportRefusalCause(egl_error, plane_layouts);
+      // kms_swrast hands the buffer to the KMS driver's own import (PRIME),
+      // where swrast and hardware drivers differ: the driver is part of why.
+      if (const std::string driver = gles::displayDriverName(display_); !driver.empty())
+        error += "; EGL driver " + driver;
       return false;
     }
     if (planes.buffer_id != 0) imported_.push_back(ImportedBuffer{planes.buffer_id, image});

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 
 namespace probelight::passes {
 
@@ -46,7 +47,9 @@ std::string dmabufImportObstacle(std::uint32_t drm_fourcc, const std::vector<Dma
   return "";
 }
 
-std::string eglImportRefusalCause(int egl_error) {
+namespace {
+
+std::string eglErrorCause(int egl_error) {
   // Codes from EGL 1.5 (egl.h), spelled out to keep this unit free of EGL.
   switch (egl_error) {
     case 0x3009:
@@ -67,6 +70,26 @@ std::string eglImportRefusalCause(int egl_error) {
       return std::string("the driver refused the import (EGL error ") + code + ")";
     }
   }
+}
+
+}  // namespace
+
+std::string eglImportRefusalCause(int egl_error, const std::vector<DmabufPlaneLayout>& planes) {
+  std::string cause = eglErrorCause(egl_error);
+  for (std::size_t p = 0; p < planes.size(); ++p) {
+    const DmabufPlaneLayout& plane = planes[p];
+    cause += "; plane " + std::to_string(p) + "'s dmabuf: ";
+    if (plane.buffer_size_bytes)
+      cause += std::to_string(*plane.buffer_size_bytes) + " bytes";
+    else
+      cause += "size unknown (lseek: " + std::string(std::strerror(plane.buffer_size_errno)) + ")";
+    if (!plane.cpu_mapping_errno) continue;
+    cause += *plane.cpu_mapping_errno == 0
+                 ? ", the CPU maps it"
+                 : ", the CPU cannot map it as a software renderer would (mmap: " +
+                       std::string(std::strerror(*plane.cpu_mapping_errno)) + ")";
+  }
+  return cause;
 }
 
 }  // namespace probelight::passes

@@ -23,6 +23,12 @@ struct DmabufPlaneLayout {
   std::int64_t rows = 0;
   // The dmabuf's size, where its file descriptor tells it (lseek to its end).
   std::optional<std::uint64_t> buffer_size_bytes;
+  // lseek's errno where it could not tell the size.
+  int buffer_size_errno = 0;
+  // Asked after a refusal only: whether the CPU could map the whole buffer
+  // for reading and writing, as a software renderer (llvmpipe) maps an
+  // imported buffer. 0 where it could, else the errno of mmap.
+  std::optional<int> cpu_mapping_errno;
 };
 
 // "NV12" for DRM's 'NV12' code; characters outside ASCII letters and
@@ -35,7 +41,8 @@ std::string fourccName(std::uint32_t drm_fourcc);
 std::string dmabufImportObstacle(std::uint32_t drm_fourcc, const std::vector<DmabufPlaneLayout>& planes,
                                  const std::optional<std::vector<std::uint32_t>>& driver_formats);
 
-// The driver's refusal as its cause, from the EGL error code.
-std::string eglImportRefusalCause(int egl_error);
+// The driver's refusal as its cause, from the EGL error code, followed by
+// what is known of each plane's buffer: its size and whether the CPU maps it.
+std::string eglImportRefusalCause(int egl_error, const std::vector<DmabufPlaneLayout>& planes = {});
 
 }  // namespace probelight::passes

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cerrno>
+#include <cstring>
+
 namespace probelight::passes {
 namespace {
 
@@ -64,6 +67,23 @@ TEST(DmabufImportCheck, TheDriversRefusalIsNamedByItsError) {
   EXPECT_NE(eglImportRefusalCause(0x300C).find("not a dmabuf"), std::string::npos);
   EXPECT_NE(eglImportRefusalCause(0x3002).find("EGL_BAD_ACCESS"), std::string::npos);
   EXPECT_EQ(eglImportRefusalCause(0x3010), "the driver refused the import (EGL error 0x3010)");
+}
+
+TEST(DmabufImportCheck, EachPlanesSizeAndCpuMappingFollowTheRefusal) {
+  DmabufPlaneLayout mapped{0, 1908, 1908, 480, 917504};
+  mapped.cpu_mapping_errno = 0;
+  DmabufPlaneLayout refused = mapped;
+  refused.cpu_mapping_errno = EINVAL;
+  DmabufPlaneLayout unknown{0, 1908, 1908, 480, std::nullopt};
+  unknown.buffer_size_errno = ESPIPE;
+  const std::string bad_alloc = eglImportRefusalCause(0x3003);
+  EXPECT_EQ(eglImportRefusalCause(0x3003, {mapped}), bad_alloc + "; plane 0's dmabuf: 917504 bytes, the CPU maps it");
+  EXPECT_EQ(eglImportRefusalCause(0x3003, {mapped, refused}),
+            bad_alloc + "; plane 0's dmabuf: 917504 bytes, the CPU maps it; plane 1's dmabuf: 917504 bytes, the CPU "
+                        "cannot map it as a software renderer would (mmap: " + std::strerror(EINVAL) + ")");
+  // Not mapped (a refusal before the driver was asked): the size alone.
+  EXPECT_EQ(eglImportRefusalCause(0x3003, {unknown}),
+            bad_alloc + "; plane 0's dmabuf: size unknown (lseek: " + std::strerror(ESPIPE) + ")");
 }
 
 }  // namespace

@@ -171,8 +171,13 @@ pass_if camera-run "probelight run --source libcamera: exit $camera_status; $(gr
 host_request verify camera-report camera-report camera-run/report.json 10
 # Zero copy: vimc's frames came in dmabufs and took one path: all imported
 # (BGR888 as its bytes) with the first matching the upload path, or all
-# uploaded with the cause in the report.
-host_request verify camera-zero-copy camera-zero-copy camera-run/report.json 10
+# uploaded with the cause in the report. On Debian 13 only the first: Mesa
+# 25's llvmpipe on its software device maps vimc's buffers itself (the
+# headless context takes that device rather than kms_swrast on virtio-gpu,
+# whose PRIME import refuses them). Debian 12's Mesa 22 has no import there.
+zero_copy_required=either
+[[ $(. /etc/os-release && echo "$VERSION_CODENAME") == trixie ]] && zero_copy_required=imported
+host_request verify camera-zero-copy camera-zero-copy camera-run/report.json 10 "$zero_copy_required"
 # The run recorded vimc's frames as they came (--record): replayed on their
 # own (the recording's camera.yaml and rig.yaml), they make the same
 # pictures; and analyze takes one (vimc's test pattern has no tag: exit 3,
