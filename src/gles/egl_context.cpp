@@ -70,20 +70,25 @@ std::unique_ptr<EglContext> finishContext(EGLDisplay display, bool use_pbuffer, 
                                       use_pbuffer ? EglSurfaceKind::kPbuffer : EglSurfaceKind::kNone, platform_name);
 }
 
+// The EGL's devices (EGL_EXT_device_enumeration), none where it lists none.
+std::vector<EGLDeviceEXT> eglDevices() {
+  auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+  EGLint count = 0;
+  if (query_devices == nullptr || !query_devices(0, nullptr, &count) || count <= 0) return {};
+  std::vector<EGLDeviceEXT> devices(static_cast<size_t>(count));
+  if (!query_devices(count, devices.data(), &count)) return {};
+  devices.resize(static_cast<size_t>(count));
+  return devices;
+}
+
 // Mesa's software EGL device (EGL_MESA_device_software), where the EGL lists
 // devices and has one.
 EGLDeviceEXT softwareDevice() {
-  auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
   auto query_device_string =
       reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
-  EGLint count = 0;
-  if (query_devices == nullptr || query_device_string == nullptr || !query_devices(0, nullptr, &count) || count <= 0)
-    return EGL_NO_DEVICE_EXT;
-  std::vector<EGLDeviceEXT> devices(static_cast<size_t>(count));
-  query_devices(count, devices.data(), &count);
-  for (EGLint i = 0; i < count; ++i)
-    if (hasExtension(query_device_string(devices[static_cast<size_t>(i)], EGL_EXTENSIONS), "EGL_MESA_device_software"))
-      return devices[static_cast<size_t>(i)];
+  if (query_device_string == nullptr) return EGL_NO_DEVICE_EXT;
+  for (EGLDeviceEXT device : eglDevices())
+    if (hasExtension(query_device_string(device, EGL_EXTENSIONS), "EGL_MESA_device_software")) return device;
   return EGL_NO_DEVICE_EXT;
 }
 
@@ -209,14 +214,11 @@ std::unique_ptr<EglContext> EglContext::createHeadless(std::string& error) {
   }
 
   if (has_platform_device) {
-    auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
-    EGLint device_count = 0;
-    if (query_devices != nullptr && query_devices(0, nullptr, &device_count) && device_count > 0) {
-      std::vector<EGLDeviceEXT> devices(static_cast<size_t>(device_count));
-      query_devices(device_count, devices.data(), &device_count);
-      for (EGLint i = 0; i < device_count; ++i) {
+    const std::vector<EGLDeviceEXT> devices = eglDevices();
+    if (!devices.empty()) {
+      for (size_t i = 0; i < devices.size(); ++i) {
         std::string why;
-        EGLDisplay display = get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[static_cast<size_t>(i)], nullptr);
+        EGLDisplay display = get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
         if (auto context = finishContext(display, false, "device", why)) return context;
         attempts += "\n  EGL_EXT_platform_device #" + std::to_string(i) + ": " + why;
       }
