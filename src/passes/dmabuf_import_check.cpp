@@ -81,8 +81,10 @@ std::string eglImportRefusalCause(int egl_error, const std::vector<DmabufPlaneLa
     cause += "; plane " + std::to_string(p) + "'s dmabuf: ";
     if (plane.buffer_size_bytes)
       cause += std::to_string(*plane.buffer_size_bytes) + " bytes";
-    else
+    else if (plane.buffer_size_errno != 0)
       cause += "size unknown (lseek: " + std::string(std::strerror(plane.buffer_size_errno)) + ")";
+    else
+      cause += "size unknown (lseek says 0 bytes)";
     if (!plane.cpu_mapping_errno) continue;
     cause += *plane.cpu_mapping_errno == 0
                  ? ", the CPU maps it"

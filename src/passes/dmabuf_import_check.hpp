@@ -23,7 +23,7 @@ struct DmabufPlaneLayout {
   std::int64_t rows = 0;
   // The dmabuf's size, where its file descriptor tells it (lseek to its end).
   std::optional<std::uint64_t> buffer_size_bytes;
-  // lseek's errno where it could not tell the size.
+  // lseek's errno where it failed (0 where it said 0 bytes or told the size).
   int buffer_size_errno = 0;
   // Asked after a refusal only: whether the CPU could map the whole buffer
   // for reading and writing, as a software renderer (llvmpipe) maps an

@@ -84,6 +84,8 @@ TEST(DmabufImportCheck, EachPlanesSizeAndCpuMappingFollowTheRefusal) {
   // Not mapped (a refusal before the driver was asked): the size alone.
   EXPECT_EQ(eglImportRefusalCause(0x3003, {unknown}),
             bad_alloc + "; plane 0's dmabuf: size unknown (lseek: " + std::strerror(ESPIPE) + ")");
+  DmabufPlaneLayout empty{0, 1908, 1908, 480, std::nullopt};
+  EXPECT_EQ(eglImportRefusalCause(0x3003, {empty}), bad_alloc + "; plane 0's dmabuf: size unknown (lseek says 0 bytes)");
 }
 
 }  // namespace
